@@ -1,0 +1,39 @@
+//! The typed error every algorithm crate returns for an invalid configuration.
+
+/// An invalid configuration value, found when a configuration is validated
+/// (at construction of a detector, map or aiding filter). Data never produces
+/// this error: bad data gives "no result", not an error.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// A value is outside its allowed range.
+    #[error("invalid configuration: `{field}` = {value} {requirement}")]
+    OutOfRange {
+        /// The configuration field, as a dotted path (`fitting.eth`).
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What the value must satisfy ("must be > 1").
+        requirement: &'static str,
+    },
+}
+
+impl ConfigError {
+    /// Checks `ok` and otherwise builds an [`ConfigError::OutOfRange`].
+    pub fn check(
+        ok: bool,
+        field: &'static str,
+        value: f64,
+        requirement: &'static str,
+    ) -> Result<(), ConfigError> {
+        if ok && !value.is_nan() {
+            Ok(())
+        } else {
+            Err(ConfigError::OutOfRange {
+                field,
+                value,
+                requirement,
+            })
+        }
+    }
+}

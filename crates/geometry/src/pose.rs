@@ -1,0 +1,130 @@
+//! [`Pose2`]: a rigid transform in the plane (position and heading).
+
+use crate::wrap_angle;
+use nalgebra::{Point2, Vector2};
+
+/// A 2D rigid transform `parent_from_child`: the child frame's origin at
+/// (`x`, `y`) in the parent frame, rotated by `heading` radians
+/// (counter-clockwise positive). A vehicle pose is `world_from_body`.
+///
+/// ```
+/// use pcaline_geometry::{Point2, Pose2};
+/// let world_from_sensor = Pose2::new(1.0, 2.0, std::f64::consts::FRAC_PI_2);
+/// let p = world_from_sensor.transform_point(&Point2::new(1.0, 0.0));
+/// assert!((p - Point2::new(1.0, 3.0)).norm() < 1e-12);
+/// let back = world_from_sensor.inverse().transform_point(&p);
+/// assert!((back - Point2::new(1.0, 0.0)).norm() < 1e-12);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pose2 {
+    /// Position x in the parent frame, metres.
+    pub x: f64,
+    /// Position y in the parent frame, metres.
+    pub y: f64,
+    /// Heading in radians, counter-clockwise from the parent's x axis, in (-pi, pi].
+    pub heading: f64,
+}
+
+impl Pose2 {
+    /// A pose; the heading is wrapped to (-pi, pi].
+    pub fn new(x: f64, y: f64, heading: f64) -> Self {
+        Pose2 {
+            x,
+            y,
+            heading: wrap_angle(heading),
+        }
+    }
+
+    /// The identity transform.
+    pub const fn identity() -> Self {
+        Pose2 {
+            x: 0.0,
+            y: 0.0,
+            heading: 0.0,
+        }
+    }
+
+    /// The translation as a vector.
+    pub fn translation(&self) -> Vector2<f64> {
+        Vector2::new(self.x, self.y)
+    }
+
+    /// True when every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.x.is_finite() && self.y.is_finite() && self.heading.is_finite()
+    }
+
+    /// Rotates a vector by the heading.
+    #[inline]
+    pub fn rotate(&self, v: &Vector2<f64>) -> Vector2<f64> {
+        let (s, c) = self.heading.sin_cos();
+        Vector2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+    }
+
+    /// Maps a point from the child frame to the parent frame.
+    #[inline]
+    pub fn transform_point(&self, p: &Point2<f64>) -> Point2<f64> {
+        let v = self.rotate(&p.coords);
+        Point2::new(v.x + self.x, v.y + self.y)
+    }
+
+    /// Composition `self * other`: if `self` is `a_from_b` and `other` is
+    /// `b_from_c`, the result is `a_from_c`.
+    pub fn compose(&self, other: &Pose2) -> Pose2 {
+        let t = self.rotate(&other.translation());
+        Pose2::new(self.x + t.x, self.y + t.y, self.heading + other.heading)
+    }
+
+    /// The inverse transform (`b_from_a` for `a_from_b`).
+    pub fn inverse(&self) -> Pose2 {
+        let (s, c) = self.heading.sin_cos();
+        Pose2::new(
+            -(c * self.x + s * self.y),
+            s * self.x - c * self.y,
+            -self.heading,
+        )
+    }
+
+    /// The relative pose `self^-1 * other`: `other` expressed in `self`'s frame
+    /// (an odometry increment from `self` to `other`).
+    pub fn between(&self, other: &Pose2) -> Pose2 {
+        self.inverse().compose(other)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn pose() -> impl Strategy<Value = Pose2> {
+        (-50.0f64..50.0, -50.0f64..50.0, -4.0f64..4.0).prop_map(|(x, y, h)| Pose2::new(x, y, h))
+    }
+
+    fn close(a: &Pose2, b: &Pose2) -> bool {
+        (a.x - b.x).abs() < 1e-9
+            && (a.y - b.y).abs() < 1e-9
+            && crate::wrap_angle(a.heading - b.heading).abs() < 1e-9
+    }
+
+    proptest! {
+        #[test]
+        fn inverse_composes_to_identity(p in pose()) {
+            prop_assert!(close(&p.compose(&p.inverse()), &Pose2::identity()));
+            prop_assert!(close(&p.inverse().compose(&p), &Pose2::identity()));
+        }
+
+        #[test]
+        fn between_undoes_compose(a in pose(), b in pose()) {
+            prop_assert!(close(&a.compose(&a.between(&b)), &b));
+        }
+
+        #[test]
+        fn compose_matches_point_mapping(a in pose(), b in pose(), x in -5.0f64..5.0, y in -5.0f64..5.0) {
+            let p = Point2::new(x, y);
+            let lhs = a.compose(&b).transform_point(&p);
+            let rhs = a.transform_point(&b.transform_point(&p));
+            prop_assert!((lhs - rhs).norm() < 1e-9);
+        }
+    }
+}

@@ -1,0 +1,137 @@
+//! Level-1 clustering (paper, section 2): a break-point wherever the distance
+//! between consecutive valid points exceeds a threshold; clusters of too few
+//! points are dropped.
+
+use crate::BreakRule;
+use pcaline_geometry::ScanPoints;
+use std::ops::Range;
+
+/// True when consecutive points `i` and `j` of `points` are separated by a
+/// level-1 break-point under `rule`. `delta_angle_rad` is the absolute bearing
+/// difference between the two points (several beams when invalid returns lie
+/// between them).
+#[inline]
+pub fn is_break(
+    points: &ScanPoints,
+    i: usize,
+    j: usize,
+    delta_angle_rad: f64,
+    rule: &BreakRule,
+) -> bool {
+    let dist2 = (points.xy[j] - points.xy[i]).norm_squared();
+    let threshold = rule.threshold_m(points.range_m[i], points.range_m[j], delta_angle_rad);
+    dist2 > threshold * threshold
+}
+
+/// Splits the points into level-1 clusters.
+///
+/// `breaks` receives the index of every point that begins a new cluster
+/// (including point 0 when there are points); `clusters` receives the clusters
+/// of at least `min_points` points, as index ranges. Both are cleared first.
+/// Points are assumed in scan order; for a closed scan rotate them first
+/// ([`seam_start`]) so that no cluster crosses the array's ends.
+pub fn level1_clusters(
+    points: &ScanPoints,
+    rule: &BreakRule,
+    min_points: usize,
+    breaks: &mut Vec<usize>,
+    clusters: &mut Vec<Range<usize>>,
+) {
+    breaks.clear();
+    clusters.clear();
+    let n = points.len();
+    if n == 0 {
+        return;
+    }
+    breaks.push(0);
+    let mut start = 0;
+    for j in 1..n {
+        let d_angle = (points.angle_rad[j] - points.angle_rad[j - 1]).abs();
+        if is_break(points, j - 1, j, d_angle, rule) {
+            breaks.push(j);
+            if j - start >= min_points {
+                clusters.push(start..j);
+            }
+            start = j;
+        }
+    }
+    if n - start >= min_points {
+        clusters.push(start..n);
+    }
+}
+
+/// For a closed (360°) scan: the index of a point that begins a level-1
+/// cluster when the scan is read as a ring, so that rotating the points to
+/// start there keeps a wall across the ±180° seam in one cluster.
+///
+/// Returns `None` when the ring has no break-point at all (a closed room seen
+/// whole) or has fewer than 2 points; then the seam is bridged later by the
+/// merge step instead.
+pub fn seam_start(points: &ScanPoints, rule: &BreakRule) -> Option<usize> {
+    let n = points.len();
+    if n < 2 {
+        return None;
+    }
+    let last = n - 1;
+    let wrap_gap = std::f64::consts::TAU - (points.angle_rad[last] - points.angle_rad[0]).abs();
+    if is_break(points, last, 0, wrap_gap.abs(), rule) {
+        return Some(0);
+    }
+    (1..n).find(|&j| {
+        let d_angle = (points.angle_rad[j] - points.angle_rad[j - 1]).abs();
+        is_break(points, j - 1, j, d_angle, rule)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pcaline_geometry::{BearingTable, Scan};
+
+    fn points_of(scan: &Scan) -> ScanPoints {
+        let mut p = ScanPoints::default();
+        p.fill_from(scan, &mut BearingTable::default());
+        p
+    }
+
+    #[test]
+    fn depth_jump_is_a_break_and_small_clusters_drop() {
+        // 10 beams at 2 m, 3 beams at 4 m, 10 beams at 2 m.
+        let mut ranges = vec![2.0f32; 10];
+        ranges.extend([4.0; 3]);
+        ranges.extend([2.0; 10]);
+        let scan = Scan::new(0.0, 0.25f32.to_radians(), 0.1, 30.0, ranges);
+        let p = points_of(&scan);
+        let (mut b, mut c) = (vec![], vec![]);
+        level1_clusters(&p, &BreakRule::paper(), 5, &mut b, &mut c);
+        assert_eq!(b, vec![0, 10, 13]);
+        assert_eq!(c, vec![0..10, 13..23]);
+    }
+
+    #[test]
+    fn empty_and_tiny_inputs() {
+        let (mut b, mut c) = (vec![1], vec![0..1]);
+        level1_clusters(
+            &ScanPoints::default(),
+            &BreakRule::paper(),
+            5,
+            &mut b,
+            &mut c,
+        );
+        assert!(b.is_empty() && c.is_empty());
+        let p = points_of(&Scan::new(0.0, 0.01, 0.1, 30.0, vec![1.0]));
+        level1_clusters(&p, &BreakRule::paper(), 5, &mut b, &mut c);
+        assert_eq!(b, vec![0]);
+        assert!(c.is_empty());
+        assert_eq!(seam_start(&p, &BreakRule::paper()), None);
+    }
+
+    #[test]
+    fn adaptive_threshold_keeps_far_grazing_wall_together() {
+        // A wall seen at 25 m: spacing 0.25° * 25 m = 11 cm, grazing makes it larger.
+        let rule = BreakRule::adaptive_utm30lx();
+        assert!(rule.threshold_m(25.0, 25.5, 0.25f64.to_radians()) > 0.3);
+        // Near points: a 15 cm gap at 1 m is a real break.
+        assert!(rule.threshold_m(1.0, 1.0, 0.25f64.to_radians()) < 0.15);
+    }
+}
