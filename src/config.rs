@@ -18,16 +18,13 @@ impl Config {
     /// dropped, signed derivative peaks (eq. 2a/2b), `ETh` 50, merge by eq. 7
     /// with `alpha_T` 0.05°.
     pub fn paper() -> Self {
-        Config {
-            segmentation: SegmentationConfig::paper(),
-            fitting: FitConfig::paper(),
-        }
+        Config { segmentation: SegmentationConfig::paper(), fitting: FitConfig::paper() }
     }
 
     /// The noise-aware detector for a sensor with range noise `noise`: adaptive
     /// level-1 threshold, recursive split at 4 sigma instead of derivative
-    /// peaks, `ETh` 50, and a merge that tests the joint residual against the
-    /// noise instead of a fixed 0.05° angle.
+    /// peaks, `ETh` 50, and a merge that tests the residual increase of one
+    /// line through both pieces against the noise instead of a fixed 0.05° angle.
     pub fn noise_aware(noise: RangeNoise) -> Self {
         Config {
             segmentation: SegmentationConfig::noise_aware(noise),

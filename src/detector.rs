@@ -31,11 +31,7 @@ impl DetectedLine {
     /// of rejected pieces lying between merged pieces.
     pub fn point_indices(&self, n_points: usize) -> impl Iterator<Item = usize> + use<> {
         let (first, last) = (self.first_point, self.last_point);
-        let len = if last >= first {
-            last - first + 1
-        } else {
-            n_points - first + last + 1
-        };
+        let len = if last >= first { last - first + 1 } else { n_points - first + last + 1 };
         (0..len).map(move |k| (first + k) % n_points.max(1))
     }
 }
@@ -146,19 +142,17 @@ impl LineDetector {
                     &mut self.derivative_scratch,
                     &mut self.sub_clusters,
                 ),
-                Level2Rule::SplitAtFarthest {
-                    sigma_factor,
-                    min_distance_m,
-                    noise,
-                } => split_at_farthest(
-                    &self.points,
-                    cluster.clone(),
-                    &noise,
-                    sigma_factor,
-                    min_distance_m,
-                    &mut self.split_stack,
-                    &mut self.sub_clusters,
-                ),
+                Level2Rule::SplitAtFarthest { sigma_factor, min_distance_m, noise } => {
+                    split_at_farthest(
+                        &self.points,
+                        cluster.clone(),
+                        &noise,
+                        sigma_factor,
+                        min_distance_m,
+                        &mut self.split_stack,
+                        &mut self.sub_clusters,
+                    )
+                }
                 Level2Rule::None => self.sub_clusters.push(cluster.clone()),
             }
         }

@@ -46,16 +46,8 @@ impl SymmetricEigen2 {
             Vector2::new(b, h - half_diff)
         };
         let norm = major.norm();
-        let major = if norm > 0.0 {
-            major / norm
-        } else {
-            Vector2::new(1.0, 0.0)
-        };
-        SymmetricEigen2 {
-            lambda_max,
-            lambda_min,
-            major,
-        }
+        let major = if norm > 0.0 { major / norm } else { Vector2::new(1.0, 0.0) };
+        SymmetricEigen2 { lambda_max, lambda_min, major }
     }
 
     /// As [`SymmetricEigen2::new`] for a covariance matrix: rounding can make

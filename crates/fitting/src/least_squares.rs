@@ -31,10 +31,7 @@ pub fn slope_intercept_from_moments(m: &Moments) -> Option<SlopeIntercept> {
         return None;
     }
     let slope = m.sxy / m.sxx;
-    let fit = SlopeIntercept {
-        m: slope,
-        n: m.mean.y - slope * m.mean.x,
-    };
+    let fit = SlopeIntercept { m: slope, n: m.mean.y - slope * m.mean.x };
     (fit.m.is_finite() && fit.n.is_finite()).then_some(fit)
 }
 
@@ -44,10 +41,7 @@ pub fn vertical_rms_error(points: &[Point2<f64>], fit: &SlopeIntercept) -> f64 {
     if points.is_empty() {
         return 0.0;
     }
-    let sum: f64 = points
-        .iter()
-        .map(|p| (p.y - fit.m * p.x - fit.n).powi(2))
-        .sum();
+    let sum: f64 = points.iter().map(|p| (p.y - fit.m * p.x - fit.n).powi(2)).sum();
     (sum / points.len() as f64).sqrt()
 }
 
@@ -58,9 +52,8 @@ mod tests {
 
     #[test]
     fn ls_and_pca_agree_on_exact_line() {
-        let pts: Vec<_> = (0..50)
-            .map(|i| Point2::new(i as f64 * 0.1, 0.5 * i as f64 * 0.1 - 2.0))
-            .collect();
+        let pts: Vec<_> =
+            (0..50).map(|i| Point2::new(i as f64 * 0.1, 0.5 * i as f64 * 0.1 - 2.0)).collect();
         let ls = fit_least_squares(&pts).unwrap();
         let pca = fit_pca(&pts).unwrap().slope_intercept().unwrap();
         assert!((ls.m - pca.m).abs() < 1e-9 && (ls.n - pca.n).abs() < 1e-9);

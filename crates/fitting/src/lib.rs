@@ -39,37 +39,35 @@ pub struct FitConfig {
     /// The eigenvalue-ratio threshold `ETh`: a piece is a line when
     /// `lambda_max / lambda_min > eth` (paper: 50). Must be > 1.
     pub eth: f64,
-    /// Fewest points a piece needs to be fitted (paper: 5, the smallest cluster
-    /// it keeps).
+    /// Fewest points a sub-cluster needs to be fitted. The paper states its
+    /// 5-point minimum for level-1 clusters only; for sub-clusters the
+    /// `paper` preset uses 3, the fewest for which the eigenvalue ratio means
+    /// anything (2 points always have `lambda_min = 0`).
     pub min_points: usize,
     /// When adjacent pieces are merged (paper: eq. 7 with `alpha_T` = 0.05°).
     pub merge: MergeRule,
 }
 
 impl FitConfig {
-    /// Exactly the paper's values: `ETh` 50, 5 points, eq. 7 with `alpha_T` 0.05°.
+    /// Exactly the paper's values: `ETh` 50, eq. 7 with `alpha_T` 0.05°, and
+    /// sub-clusters of 3 points or more fitted.
     pub fn paper() -> Self {
         FitConfig {
             eth: 50.0,
-            min_points: 5,
-            merge: MergeRule::Angles {
-                alpha_t_rad: 0.05f64.to_radians(),
-            },
+            min_points: 3,
+            merge: MergeRule::Angles { alpha_t_rad: 0.05f64.to_radians() },
         }
     }
 
     /// The noise-aware variant: the same elongation test, and a merge that
-    /// accepts two pieces when their joint residual is consistent with the
-    /// sensor noise (within 2.5 sigma) instead of a 0.05° angle, which noise
-    /// alone exceeds on short pieces.
+    /// accepts two pieces when one line through both is consistent with the
+    /// sensor noise (residual increase below the 99.9% point of `chi²(2)`)
+    /// instead of a 0.05° angle, which noise alone exceeds on short pieces.
     pub fn noise_aware(noise: RangeNoise) -> Self {
         FitConfig {
             eth: 50.0,
             min_points: 5,
-            merge: MergeRule::Residual {
-                max_sigma_ratio: 2.5,
-                noise,
-            },
+            merge: MergeRule::ResidualIncrease { max_chi2: 13.8, noise },
         }
     }
 
@@ -77,10 +75,10 @@ impl FitConfig {
     pub fn validate(&self) -> Result<(), ConfigError> {
         ConfigError::check(self.eth > 1.0, "fitting.eth", self.eth, "must be > 1")?;
         ConfigError::check(
-            self.min_points >= 2,
+            self.min_points >= 3,
             "fitting.min_points",
             self.min_points as f64,
-            "must be >= 2",
+            "must be >= 3",
         )?;
         match self.merge {
             MergeRule::Angles { alpha_t_rad } => ConfigError::check(
@@ -89,14 +87,11 @@ impl FitConfig {
                 alpha_t_rad,
                 "must be finite and >= 0",
             ),
-            MergeRule::Residual {
-                max_sigma_ratio,
-                noise,
-            } => {
+            MergeRule::ResidualIncrease { max_chi2, noise } => {
                 ConfigError::check(
-                    max_sigma_ratio > 0.0 && max_sigma_ratio.is_finite(),
-                    "fitting.merge.max_sigma_ratio",
-                    max_sigma_ratio,
+                    max_chi2 > 0.0 && max_chi2.is_finite(),
+                    "fitting.merge.max_chi2",
+                    max_chi2,
                     "must be finite and > 0",
                 )?;
                 noise.validate("fitting.merge.noise")

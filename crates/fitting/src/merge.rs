@@ -29,12 +29,19 @@ pub enum MergeRule {
         /// The angular threshold `alpha_T` in radians (paper: 0.05°).
         alpha_t_rad: f64,
     },
-    /// A statistical test: merge when the joint fit's residual standard
-    /// deviation stays within `max_sigma_ratio` times the range noise at the
-    /// joint centroid's range (the sensor is at the origin of the frame).
-    Residual {
-        /// Allowed ratio of the joint residual std to the noise sigma.
-        max_sigma_ratio: f64,
+    /// A statistical test: merge when forcing one line through both pieces
+    /// increases the sum of squared orthogonal residuals by no more than
+    /// `max_chi2` noise variances. For two pieces of one straight wall the
+    /// increase is `sigma² chi²(2)` (two more parameters), so a `chi²(2)`
+    /// quantile is the natural threshold (13.8 is its 99.9% point). The noise
+    /// variance is the larger of the model's at the joint centroid's range (the
+    /// sensor is at the frame origin) and the pieces' pooled residual variance,
+    /// so a sensor noisier than its model does not fragment walls. Unlike a
+    /// test on the joint residual alone, a short piece across a corner cannot
+    /// hide in a long wall's average.
+    ResidualIncrease {
+        /// Largest allowed increase, in noise variances.
+        max_chi2: f64,
         /// The sensor's range noise.
         noise: RangeNoise,
     },
@@ -57,19 +64,18 @@ impl MergeRule {
                     && line_angle_diff(a1, acc).abs() < alpha_t_rad
                     && line_angle_diff(a2, acc).abs() < alpha_t_rad
             }
-            MergeRule::Residual {
-                max_sigma_ratio,
-                noise,
-            } => {
-                let joint = a.merge(b);
-                if joint.n <= 2 {
+            MergeRule::ResidualIncrease { max_chi2, noise } => {
+                if a.n < 2 || b.n < 2 {
                     return false;
                 }
-                let e = joint.eigen();
-                let n = joint.n as f64;
-                let s2 = e.lambda_min * n / (n - 2.0);
-                let sigma = noise.sigma_at(joint.mean.coords.norm());
-                s2 <= (max_sigma_ratio * sigma).powi(2)
+                let joint = a.merge(b);
+                let sse = |m: &Moments| m.eigen().lambda_min * m.n as f64;
+                let (sse_a, sse_b) = (sse(a), sse(b));
+                let increase = sse(&joint) - sse_a - sse_b;
+                let dof = joint.n.saturating_sub(4).max(1) as f64;
+                let pooled = (sse_a + sse_b) / dof;
+                let model = noise.sigma_at(joint.mean.coords.norm()).powi(2);
+                increase <= max_chi2 * model.max(pooled)
             }
         }
     }
@@ -128,25 +134,16 @@ mod tests {
     use pcaline_geometry::Point2;
 
     fn piece(pts: &[Point2<f64>], first: usize, cluster: usize) -> Piece {
-        Piece {
-            moments: Moments::from_points(pts),
-            first,
-            last: first + pts.len() - 1,
-            cluster,
-        }
+        Piece { moments: Moments::from_points(pts), first, last: first + pts.len() - 1, cluster }
     }
 
     fn wall(from: f64, to: f64, y: f64) -> Vec<Point2<f64>> {
-        (0..10)
-            .map(|i| Point2::new(from + (to - from) * i as f64 / 9.0, y))
-            .collect()
+        (0..10).map(|i| Point2::new(from + (to - from) * i as f64 / 9.0, y)).collect()
     }
 
     #[test]
     fn collinear_pieces_merge_and_others_do_not() {
-        let rule = MergeRule::Angles {
-            alpha_t_rad: 0.05f64.to_radians(),
-        };
+        let rule = MergeRule::Angles { alpha_t_rad: 0.05f64.to_radians() };
         let mut v = vec![
             piece(&wall(0.0, 1.0, 2.0), 0, 0),
             piece(&wall(1.1, 2.0, 2.0), 10, 0),
@@ -171,10 +168,7 @@ mod tests {
 
     #[test]
     fn clusters_do_not_merge() {
-        let mut v = vec![
-            piece(&wall(0.0, 1.0, 2.0), 0, 0),
-            piece(&wall(1.1, 2.0, 2.0), 10, 1),
-        ];
+        let mut v = vec![piece(&wall(0.0, 1.0, 2.0), 0, 0), piece(&wall(1.1, 2.0, 2.0), 10, 1)];
         merge_adjacent(&mut v, &MergeRule::Angles { alpha_t_rad: 0.1 }, false);
         assert_eq!(v.len(), 2);
     }
@@ -183,22 +177,22 @@ mod tests {
     fn angle_comparison_wraps() {
         // Directions near +90° and -90° are the same undirected line.
         let a: Vec<_> = (0..10).map(|i| Point2::new(2.0, i as f64 * 0.1)).collect();
-        let b: Vec<_> = (0..10)
-            .map(|i| Point2::new(2.0, 2.0 - i as f64 * 0.1))
-            .collect();
+        let b: Vec<_> = (0..10).map(|i| Point2::new(2.0, 2.0 - i as f64 * 0.1)).collect();
         let rule = MergeRule::Angles { alpha_t_rad: 0.01 };
         assert!(rule.accepts(&Moments::from_points(&a), &Moments::from_points(&b)));
     }
 
     #[test]
     fn residual_rule_uses_noise() {
-        let rule = MergeRule::Residual {
-            max_sigma_ratio: 2.0,
-            noise: RangeNoise::constant(0.01),
-        };
+        let rule =
+            MergeRule::ResidualIncrease { max_chi2: 13.8, noise: RangeNoise::constant(0.01) };
         let a = Moments::from_points(&wall(0.0, 1.0, 2.0));
         assert!(rule.accepts(&a, &Moments::from_points(&wall(1.1, 2.0, 2.0))));
         assert!(!rule.accepts(&a, &Moments::from_points(&wall(1.1, 2.0, 2.1))));
+        // A short tail around a corner does not hide in a long wall.
+        let long: Vec<_> = (0..400).map(|i| Point2::new(i as f64 * 0.01, 2.0)).collect();
+        let tail: Vec<_> = (0..12).map(|i| Point2::new(4.0, 2.0 - i as f64 * 0.015)).collect();
+        assert!(!rule.accepts(&Moments::from_points(&long), &Moments::from_points(&tail)));
     }
 
     #[test]

@@ -27,13 +27,8 @@ pub struct Moments {
 
 impl Moments {
     /// The moments of no points.
-    pub const EMPTY: Moments = Moments {
-        n: 0,
-        mean: Point2::new(0.0, 0.0),
-        sxx: 0.0,
-        sxy: 0.0,
-        syy: 0.0,
-    };
+    pub const EMPTY: Moments =
+        Moments { n: 0, mean: Point2::new(0.0, 0.0), sxx: 0.0, sxy: 0.0, syy: 0.0 };
 
     /// The moments of `points` in one pass.
     ///
@@ -181,10 +176,7 @@ mod tests {
         // A 1 cm scatter 10 km away: raw sums would lose it entirely.
         let pts: Vec<_> = (0..100)
             .map(|i| {
-                Point2::new(
-                    1e4 + i as f64 * 0.01,
-                    1e4 + if i % 2 == 0 { 0.01 } else { -0.01 },
-                )
+                Point2::new(1e4 + i as f64 * 0.01, 1e4 + if i % 2 == 0 { 0.01 } else { -0.01 })
             })
             .collect();
         let m = Moments::from_points(&pts);

@@ -60,22 +60,14 @@ pub fn line_from_eigen(
     }
     let mut line = LineSegment::through(moments.mean, eigen.major, *first, *last);
     let n = moments.n as f64;
-    let s2 = if moments.n > 2 {
-        eigen.lambda_min * n / (n - 2.0)
-    } else {
-        0.0
-    };
+    let s2 = if moments.n > 2 { eigen.lambda_min * n / (n - 2.0) } else { 0.0 };
     let var_alpha = s2 / (n * eigen.lambda_max);
     let tangent = Vector2::new(-line.alpha.sin(), line.alpha.cos());
     let t = tangent.dot(&line.centroid.coords);
     line.n_points = moments.n;
     line.residual_std = s2.sqrt();
-    line.covariance = Matrix2::new(
-        var_alpha,
-        t * var_alpha,
-        t * var_alpha,
-        s2 / n + t * t * var_alpha,
-    );
+    line.covariance =
+        Matrix2::new(var_alpha, t * var_alpha, t * var_alpha, s2 / n + t * t * var_alpha);
     Some(line)
 }
 
@@ -89,9 +81,7 @@ mod tests {
 
     #[test]
     fn horizontal_wall() {
-        let pts: Vec<_> = (0..20)
-            .map(|i| Point2::new(i as f64 * 0.1 - 1.0, -2.0))
-            .collect();
+        let pts: Vec<_> = (0..20).map(|i| Point2::new(i as f64 * 0.1 - 1.0, -2.0)).collect();
         let l = fit_pca(&pts).unwrap();
         assert!((l.alpha + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         assert!((l.d - 2.0).abs() < 1e-12);
@@ -139,32 +129,19 @@ mod tests {
         }
         let ratio_a = sa / pred_a;
         let ratio_d = sd / pred_d;
-        assert!(
-            (0.85..1.15).contains(&ratio_a),
-            "alpha variance ratio {ratio_a}"
-        );
-        assert!(
-            (0.85..1.15).contains(&ratio_d),
-            "d variance ratio {ratio_d}"
-        );
+        assert!((0.85..1.15).contains(&ratio_a), "alpha variance ratio {ratio_a}");
+        assert!((0.85..1.15).contains(&ratio_d), "d variance ratio {ratio_d}");
         let _ = rng.random_range(0..1); // keep RngExt in use
     }
 
     fn collinear() -> impl Strategy<Value = (Vec<Point2<f64>>, f64, f64)> {
-        (
-            -3.2f64..3.2,
-            -20.0f64..20.0,
-            -20.0f64..20.0,
-            3usize..200,
-            0.001f64..0.5,
-        )
-            .prop_map(|(angle, cx, cy, n, step)| {
+        (-3.2f64..3.2, -20.0f64..20.0, -20.0f64..20.0, 3usize..200, 0.001f64..0.5).prop_map(
+            |(angle, cx, cy, n, step)| {
                 let dir = Vector2::new(angle.cos(), angle.sin());
-                let pts = (0..n)
-                    .map(|i| Point2::new(cx, cy) + dir * (i as f64 * step))
-                    .collect();
+                let pts = (0..n).map(|i| Point2::new(cx, cy) + dir * (i as f64 * step)).collect();
                 (pts, angle, (cx, cy).0)
-            })
+            },
+        )
     }
 
     proptest! {

@@ -27,11 +27,7 @@ pub struct BearingTable {
 impl BearingTable {
     /// Makes the table match `scan`'s geometry.
     pub fn update(&mut self, scan: &Scan) {
-        let key = (
-            scan.angle_min.to_bits(),
-            scan.angle_increment.to_bits(),
-            scan.len(),
-        );
+        let key = (scan.angle_min.to_bits(), scan.angle_increment.to_bits(), scan.len());
         if self.key == Some(key) {
             return;
         }
@@ -96,8 +92,7 @@ impl ScanPoints {
                 continue;
             }
             let r = f64::from(r);
-            self.xy
-                .push(Point2::new(r * table.cos[i], r * table.sin[i]));
+            self.xy.push(Point2::new(r * table.cos[i], r * table.sin[i]));
             self.range_m.push(r);
             self.angle_rad.push(table.angles[i]);
             self.beam.push(i as u32);
@@ -169,16 +164,7 @@ mod tests {
             0.1,
             0.2,
             10.0,
-            vec![
-                1.0,
-                f32::NAN,
-                f32::INFINITY,
-                f32::NEG_INFINITY,
-                0.1,
-                10.0,
-                11.0,
-                2.0,
-            ],
+            vec![1.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.1, 10.0, 11.0, 2.0],
         );
         let mut t = BearingTable::default();
         let mut p = ScanPoints::default();

@@ -29,11 +29,7 @@ impl ConfigError {
         if ok && !value.is_nan() {
             Ok(())
         } else {
-            Err(ConfigError::OutOfRange {
-                field,
-                value,
-                requirement,
-            })
+            Err(ConfigError::OutOfRange { field, value, requirement })
         }
     }
 }

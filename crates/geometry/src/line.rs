@@ -107,10 +107,7 @@ impl LineSegment {
             return None;
         }
         let m = self.direction.y / self.direction.x;
-        Some(SlopeIntercept {
-            m,
-            n: self.centroid.y - m * self.centroid.x,
-        })
+        Some(SlopeIntercept { m, n: self.centroid.y - m * self.centroid.x })
     }
 
     /// The same segment expressed in the parent frame of `parent_from_self`

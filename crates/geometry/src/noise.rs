@@ -21,48 +21,26 @@ pub struct RangeNoise {
 impl RangeNoise {
     /// The UTM-30LX-EW datasheet: 10 mm below 10 m, 30 mm beyond.
     pub const fn utm30lx() -> Self {
-        RangeNoise {
-            near_sigma_m: 0.01,
-            far_sigma_m: 0.03,
-            far_from_m: 10.0,
-        }
+        RangeNoise { near_sigma_m: 0.01, far_sigma_m: 0.03, far_from_m: 10.0 }
     }
 
     /// The same sigma at every range.
     pub const fn constant(sigma_m: f64) -> Self {
-        RangeNoise {
-            near_sigma_m: sigma_m,
-            far_sigma_m: sigma_m,
-            far_from_m: f64::INFINITY,
-        }
+        RangeNoise { near_sigma_m: sigma_m, far_sigma_m: sigma_m, far_from_m: f64::INFINITY }
     }
 
     /// Sigma in metres at `range_m`.
     #[inline]
     pub fn sigma_at(&self, range_m: f64) -> f64 {
-        if range_m < self.far_from_m {
-            self.near_sigma_m
-        } else {
-            self.far_sigma_m
-        }
+        if range_m < self.far_from_m { self.near_sigma_m } else { self.far_sigma_m }
     }
 
     /// Checks that both sigmas are finite and non-negative.
     pub fn validate(&self, field: &'static str) -> Result<(), ConfigError> {
         for s in [self.near_sigma_m, self.far_sigma_m] {
-            ConfigError::check(
-                s.is_finite() && s >= 0.0,
-                field,
-                s,
-                "must be finite and >= 0",
-            )?;
+            ConfigError::check(s.is_finite() && s >= 0.0, field, s, "must be finite and >= 0")?;
         }
-        ConfigError::check(
-            self.far_from_m >= 0.0,
-            field,
-            self.far_from_m,
-            "must be >= 0",
-        )
+        ConfigError::check(self.far_from_m >= 0.0, field, self.far_from_m, "must be >= 0")
     }
 }
 

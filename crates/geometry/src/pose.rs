@@ -28,20 +28,12 @@ pub struct Pose2 {
 impl Pose2 {
     /// A pose; the heading is wrapped to (-pi, pi].
     pub fn new(x: f64, y: f64, heading: f64) -> Self {
-        Pose2 {
-            x,
-            y,
-            heading: wrap_angle(heading),
-        }
+        Pose2 { x, y, heading: wrap_angle(heading) }
     }
 
     /// The identity transform.
     pub const fn identity() -> Self {
-        Pose2 {
-            x: 0.0,
-            y: 0.0,
-            heading: 0.0,
-        }
+        Pose2 { x: 0.0, y: 0.0, heading: 0.0 }
     }
 
     /// The translation as a vector.
@@ -78,11 +70,7 @@ impl Pose2 {
     /// The inverse transform (`b_from_a` for `a_from_b`).
     pub fn inverse(&self) -> Pose2 {
         let (s, c) = self.heading.sin_cos();
-        Pose2::new(
-            -(c * self.x + s * self.y),
-            s * self.x - c * self.y,
-            -self.heading,
-        )
+        Pose2::new(-(c * self.x + s * self.y), s * self.x - c * self.y, -self.heading)
     }
 
     /// The relative pose `self^-1 * other`: `other` expressed in `self`'s frame

@@ -110,14 +110,8 @@ mod tests {
 
     #[test]
     fn empty_and_tiny_inputs() {
-        let (mut b, mut c) = (vec![1], vec![0..1]);
-        level1_clusters(
-            &ScanPoints::default(),
-            &BreakRule::paper(),
-            5,
-            &mut b,
-            &mut c,
-        );
+        let (mut b, mut c) = (vec![1], vec![0..1, 2..3]);
+        level1_clusters(&ScanPoints::default(), &BreakRule::paper(), 5, &mut b, &mut c);
         assert!(b.is_empty() && c.is_empty());
         let p = points_of(&Scan::new(0.0, 0.01, 0.1, 30.0, vec![1.0]));
         level1_clusters(&p, &BreakRule::paper(), 5, &mut b, &mut c);

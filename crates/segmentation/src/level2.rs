@@ -26,7 +26,8 @@ pub enum DerivativeSign {
 /// *standard deviation* over the cluster, as the paper's text says (the
 /// printed formula omits the square root, which would make the threshold
 /// depend on the unit of length). A peak is a value above the threshold that
-/// is greater than its left neighbour and not smaller than its right one.
+/// is greater than its left neighbour and not smaller than its right one; the
+/// first and last derivative have only one neighbour and are never peaks.
 /// Clusters of fewer than 4 points (fewer than 3 derivatives) are not split.
 /// `scratch` is a reused buffer.
 pub fn derivative_peak_split(
@@ -45,11 +46,7 @@ pub fn derivative_peak_split(
     for k in cluster.start + 1..cluster.end {
         let dtheta = points.angle_rad[k] - points.angle_rad[k - 1];
         let d = points.xy[k] - points.xy[k - 1];
-        let (dx, dy) = if dtheta != 0.0 {
-            (d.x / dtheta, d.y / dtheta)
-        } else {
-            (0.0, 0.0)
-        };
+        let (dx, dy) = if dtheta != 0.0 { (d.x / dtheta, d.y / dtheta) } else { (0.0, 0.0) };
         scratch.push(match sign {
             DerivativeSign::Signed => [dx, dy],
             DerivativeSign::Absolute => [dx.abs(), dy.abs()],
@@ -59,11 +56,7 @@ pub fn derivative_peak_split(
     let mut thresholds = [0.0; 2];
     for (axis, t) in thresholds.iter_mut().enumerate() {
         let mean = scratch.iter().map(|v| v[axis]).sum::<f64>() / m;
-        let var = scratch
-            .iter()
-            .map(|v| (v[axis] - mean).powi(2))
-            .sum::<f64>()
-            / (m - 1.0);
+        let var = scratch.iter().map(|v| (v[axis] - mean).powi(2)).sum::<f64>() / (m - 1.0);
         *t = mean + var.sqrt();
     }
     let mut start = cluster.start;
@@ -71,8 +64,9 @@ pub fn derivative_peak_split(
         let is_peak = |axis: usize| {
             let x = v[axis];
             x > thresholds[axis]
-                && (idx == 0 || x > scratch[idx - 1][axis])
-                && scratch.get(idx + 1).is_none_or(|next| x >= next[axis])
+                && idx > 0
+                && x > scratch[idx - 1][axis]
+                && scratch.get(idx + 1).is_some_and(|next| x >= next[axis])
         };
         if is_peak(0) || is_peak(1) {
             let k = cluster.start + 1 + idx;
@@ -94,16 +88,8 @@ mod tests {
         let ranges: Vec<f32> = (0..160)
             .map(|i| {
                 let a = -40f64.to_radians() + i as f64 * inc;
-                let rx = if a.cos() > 1e-9 {
-                    2.0 / a.cos()
-                } else {
-                    f64::INFINITY
-                };
-                let ry = if a.sin() > 1e-9 {
-                    1.0 / a.sin()
-                } else {
-                    f64::INFINITY
-                };
+                let rx = if a.cos() > 1e-9 { 2.0 / a.cos() } else { f64::INFINITY };
+                let ry = if a.sin() > 1e-9 { 1.0 / a.sin() } else { f64::INFINITY };
                 rx.min(ry) as f32
             })
             .collect();
@@ -133,16 +119,9 @@ mod tests {
         // The corner is where the wall x = 2 meets y = 1: bearing atan(1/2).
         let corner = p.angle_rad.iter().position(|&a| a > 0.5f64.atan()).unwrap();
         let mut out = vec![];
-        derivative_peak_split(
-            &p,
-            0..p.len(),
-            DerivativeSign::Absolute,
-            &mut vec![],
-            &mut out,
-        );
+        derivative_peak_split(&p, 0..p.len(), DerivativeSign::Absolute, &mut vec![], &mut out);
         assert!(
-            out.iter()
-                .any(|r| (r.start as i64 - corner as i64).abs() <= 2),
+            out.iter().any(|r| (r.start as i64 - corner as i64).abs() <= 2),
             "break-points {out:?}, corner at {corner}"
         );
     }

@@ -81,11 +81,7 @@ impl BreakRule {
     pub fn threshold_m(&self, r_i: f64, r_j: f64, delta_angle_rad: f64) -> f64 {
         match *self {
             BreakRule::Fixed { dth_m } => dth_m,
-            BreakRule::Adaptive {
-                lambda_rad,
-                sigma_factor,
-                noise,
-            } => {
+            BreakRule::Adaptive { lambda_rad, sigma_factor, noise } => {
                 let r = r_i.min(r_j);
                 let dphi = delta_angle_rad.min(0.5 * lambda_rad);
                 r * dphi.sin() / (lambda_rad - dphi).sin()
@@ -102,11 +98,7 @@ impl BreakRule {
                 dth_m,
                 "must be finite and > 0",
             ),
-            BreakRule::Adaptive {
-                lambda_rad,
-                sigma_factor,
-                noise,
-            } => {
+            BreakRule::Adaptive { lambda_rad, sigma_factor, noise } => {
                 ConfigError::check(
                     lambda_rad > 0.0 && lambda_rad < std::f64::consts::FRAC_PI_2,
                     "segmentation.level1.lambda",
@@ -165,9 +157,7 @@ impl SegmentationConfig {
         SegmentationConfig {
             level1: BreakRule::paper(),
             min_cluster_points: 5,
-            level2: Level2Rule::DerivativePeaks {
-                sign: DerivativeSign::Signed,
-            },
+            level2: Level2Rule::DerivativePeaks { sign: DerivativeSign::Signed },
         }
     }
 
@@ -181,11 +171,7 @@ impl SegmentationConfig {
                 noise,
             },
             min_cluster_points: 5,
-            level2: Level2Rule::SplitAtFarthest {
-                sigma_factor: 4.0,
-                min_distance_m: 0.0,
-                noise,
-            },
+            level2: Level2Rule::SplitAtFarthest { sigma_factor: 4.0, min_distance_m: 0.0, noise },
         }
     }
 
@@ -198,12 +184,7 @@ impl SegmentationConfig {
             self.min_cluster_points as f64,
             "must be >= 2",
         )?;
-        if let Level2Rule::SplitAtFarthest {
-            sigma_factor,
-            min_distance_m,
-            noise,
-        } = self.level2
-        {
+        if let Level2Rule::SplitAtFarthest { sigma_factor, min_distance_m, noise } = self.level2 {
             ConfigError::check(
                 sigma_factor > 0.0 && sigma_factor.is_finite(),
                 "segmentation.level2.sigma_factor",

@@ -54,11 +54,7 @@ fn farthest_split(
     let mut best = (0.0f64, 0usize, 0.0f64);
     for k in r.start + 1..r.end - 1 {
         let v = points.xy[k] - a;
-        let dist = if len > 1e-12 {
-            (chord.x * v.y - chord.y * v.x).abs() / len
-        } else {
-            v.norm()
-        };
+        let dist = if len > 1e-12 { (chord.x * v.y - chord.y * v.x).abs() / len } else { v.norm() };
         // Compare each point's distance with its own noise-based threshold.
         let thr = (sigma_factor * noise.sigma_at(points.range_m[k])).max(min_distance_m);
         let excess = dist / thr;
@@ -82,11 +78,7 @@ mod tests {
             .map(|i| {
                 let a = -40f64.to_radians() + i as f64 * inc;
                 let rx = 2.0 / a.cos();
-                let ry = if a.sin() > 1e-9 {
-                    1.0 / a.sin()
-                } else {
-                    f64::INFINITY
-                };
+                let ry = if a.sin() > 1e-9 { 1.0 / a.sin() } else { f64::INFINITY };
                 rx.min(ry) as f32
             })
             .collect();
