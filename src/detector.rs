@@ -2,7 +2,9 @@
 //! scan, with reusable buffers and the intermediate results exposed.
 
 use crate::Config;
-use pcaline_fitting::{Moments, Piece, is_elongated, line_from_moments, merge_adjacent};
+use pcaline_fitting::{
+    Moments, Piece, is_elongated, line_from_moments, merge_adjacent, refine_boundaries,
+};
 use pcaline_geometry::{BearingTable, ConfigError, LineSegment, Scan, ScanPoints};
 use pcaline_segmentation::{
     Level2Rule, derivative_peak_split, level1_clusters, seam_start, split_at_farthest,
@@ -134,6 +136,7 @@ impl LineDetector {
 
         self.sub_clusters.clear();
         for cluster in &self.clusters {
+            let first_sub = self.sub_clusters.len();
             match seg.level2 {
                 Level2Rule::DerivativePeaks { sign } => derivative_peak_split(
                     &self.points,
@@ -155,6 +158,11 @@ impl LineDetector {
                 }
                 Level2Rule::None => self.sub_clusters.push(cluster.clone()),
             }
+            refine_boundaries(
+                &self.points.xy,
+                &mut self.sub_clusters[first_sub..],
+                fit.corner_window,
+            );
         }
 
         self.pieces.clear();

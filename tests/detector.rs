@@ -4,7 +4,7 @@
 mod support;
 
 use pcaline::segmentation::{DerivativeSign, Level2Rule};
-use pcaline::{Config, LineDetector, Point2, Scan, fitting::FitConfig, geometry::line_angle_diff};
+use pcaline::{Config, LineDetector, Point2, Scan, fitting::FitConfig, geometry::wrap_angle};
 use proptest::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 use support::*;
@@ -248,9 +248,8 @@ fn noisy_room_default_finds_the_walls() {
             .lines
             .iter()
             .filter(|l| {
-                line_angle_diff(l.line.alpha, alpha).abs() < 1f64.to_radians()
+                wrap_angle(l.line.alpha - alpha).abs() < 1f64.to_radians()
                     && (l.line.d - dist).abs() < 0.02
-                    && l.line.alpha * alpha >= 0.0
             })
             .collect();
         assert_eq!(hits.len(), runs, "wall ({alpha}, {dist}): {:#?}", d.lines);

@@ -17,6 +17,7 @@
 //! assert!((line.d - 1.0).abs() < 1e-12);
 //! ```
 
+mod corners;
 mod eigen;
 mod elongation;
 mod least_squares;
@@ -24,6 +25,7 @@ mod merge;
 mod moments;
 mod pca;
 
+pub use corners::refine_boundaries;
 pub use eigen::SymmetricEigen2;
 pub use elongation::{elongation_ratio, is_elongated};
 pub use least_squares::{fit_least_squares, slope_intercept_from_moments, vertical_rms_error};
@@ -46,6 +48,10 @@ pub struct FitConfig {
     pub min_points: usize,
     /// When adjacent pieces are merged (paper: eq. 7 with `alpha_T` = 0.05°).
     pub merge: MergeRule,
+    /// Points around each level-2 break-point that may move to the
+    /// neighbouring piece when they fit its line better
+    /// ([`refine_boundaries`]); 0 disables it (paper).
+    pub corner_window: usize,
 }
 
 impl FitConfig {
@@ -56,18 +62,21 @@ impl FitConfig {
             eth: 50.0,
             min_points: 3,
             merge: MergeRule::Angles { alpha_t_rad: 0.05f64.to_radians() },
+            corner_window: 0,
         }
     }
 
     /// The noise-aware variant: the same elongation test, and a merge that
     /// accepts two pieces when one line through both is consistent with the
     /// sensor noise (residual increase below the 99.9% point of `chi²(2)`)
-    /// instead of a 0.05° angle, which noise alone exceeds on short pieces.
+    /// instead of a 0.05° angle, which noise alone exceeds on short pieces;
+    /// and corner points assigned to the line they fit (window of 3 points).
     pub fn noise_aware(noise: RangeNoise) -> Self {
         FitConfig {
             eth: 50.0,
             min_points: 5,
             merge: MergeRule::ResidualIncrease { max_chi2: 13.8, noise },
+            corner_window: 3,
         }
     }
 
