@@ -1,0 +1,459 @@
+//! [`Scene`]: a simulated environment as read from a scene file (walls,
+//! obstacles, sensor, trajectory, odometry errors), and its validation.
+//!
+//! The types derive serde with unknown keys refused; reading files is the `io`
+//! crate's job. See `sim-scenes/README.md` for the schema with an example.
+
+use crate::{OdometryModel, SensorModel, Tilt, Trajectory, Wall, World};
+use pcaline_geometry::{Point2, Pose2, RangeNoise};
+use serde::{Deserialize, Serialize};
+
+/// A scene: the world, the sensor, and how the vehicle moves through it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Short name.
+    pub name: String,
+    /// What the scene is for.
+    #[serde(default)]
+    pub description: String,
+    /// The simulated sensor.
+    #[serde(default)]
+    pub sensor: SensorSpec,
+    /// Walls, as polylines or closed polygons.
+    #[serde(default)]
+    pub walls: Vec<Shape>,
+    /// Named obstacles (pillars, furniture, clutter), usually closed polygons.
+    #[serde(default)]
+    pub obstacles: Vec<Shape>,
+    /// The true motion.
+    pub trajectory: TrajectorySpec,
+    /// Errors of the simulated localization source.
+    #[serde(default)]
+    pub odometry: OdometrySpec,
+}
+
+/// A polyline (or closed polygon) of walls.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Shape {
+    /// Name, used in error messages and ground truth.
+    #[serde(default)]
+    pub name: String,
+    /// Vertices `[x, y]` in metres, world frame.
+    pub points: Vec<[f64; 2]>,
+    /// Join the last vertex back to the first.
+    #[serde(default)]
+    pub closed: bool,
+}
+
+/// The sensor of a scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorSpec {
+    /// Base model.
+    pub model: SensorKind,
+    /// Replaces the model's range noise with a constant sigma, metres.
+    pub range_sigma_m: Option<f64>,
+    /// Outlier probability per beam.
+    pub outlier_probability: f64,
+    /// Dropout probability per beam.
+    pub dropout_probability: f64,
+    /// Mixed-pixel probability per beam at a depth edge.
+    pub mixed_pixel_probability: f64,
+    /// Beams taken at their own times within the scan.
+    pub motion_skew: bool,
+    /// Sway of the scan plane.
+    pub tilt: Option<TiltSpec>,
+}
+
+impl Default for SensorSpec {
+    fn default() -> Self {
+        SensorSpec {
+            model: SensorKind::Utm30lxEw,
+            range_sigma_m: None,
+            outlier_probability: 0.0,
+            dropout_probability: 0.0,
+            mixed_pixel_probability: 0.0,
+            motion_skew: false,
+            tilt: None,
+        }
+    }
+}
+
+/// The base sensor models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SensorKind {
+    /// [`SensorModel::utm30lx_ew`].
+    #[serde(rename = "utm30lx-ew")]
+    Utm30lxEw,
+    /// [`SensorModel::sick_lms_180`].
+    #[serde(rename = "sick-lms-180")]
+    SickLms180,
+}
+
+/// Sway of the scan plane, in degrees.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TiltSpec {
+    /// Roll amplitude, degrees.
+    pub roll_amplitude_deg: f64,
+    /// Pitch amplitude, degrees.
+    pub pitch_amplitude_deg: f64,
+    /// Period, seconds.
+    pub period_s: f64,
+}
+
+/// The true motion: start pose and waypoints.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrajectorySpec {
+    /// Start pose.
+    pub start: StartPose,
+    /// Waypoints `[x, y]` visited in order.
+    pub waypoints: Vec<[f64; 2]>,
+    /// Driving speed, m/s.
+    #[serde(default = "default_speed")]
+    pub speed_m_s: f64,
+    /// Turning rate in place, degrees/s.
+    #[serde(default = "default_yaw_rate")]
+    pub yaw_rate_deg_s: f64,
+    /// Times the path is driven (returning to the start in between).
+    #[serde(default = "default_laps")]
+    pub laps: u32,
+    /// Scans per second; the sensor's rate when absent.
+    #[serde(default)]
+    pub scan_rate_hz: Option<f64>,
+}
+
+fn default_speed() -> f64 {
+    1.0
+}
+fn default_yaw_rate() -> f64 {
+    90.0
+}
+fn default_laps() -> u32 {
+    1
+}
+
+/// A pose with the heading in degrees.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartPose {
+    /// x, metres.
+    pub x: f64,
+    /// y, metres.
+    pub y: f64,
+    /// Heading, degrees counter-clockwise from x.
+    #[serde(default)]
+    pub heading_deg: f64,
+}
+
+/// Odometry errors, in the units people quote them in.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OdometrySpec {
+    /// Heading-rate bias, degrees/s.
+    pub heading_rate_bias_deg_s: f64,
+    /// Heading random walk, degrees/sqrt(s).
+    pub heading_random_walk_deg_sqrt_s: f64,
+    /// Relative speed error.
+    pub speed_scale_error: f64,
+    /// Position random walk, m/sqrt(s).
+    pub position_random_walk_m_sqrt_s: f64,
+}
+
+/// A scene that cannot be simulated, naming the offending item.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{item}: {message}")]
+pub struct SceneError {
+    /// The item, as a path into the scene (`walls[2] "north"`, `trajectory.speed_m_s`).
+    pub item: String,
+    /// What is wrong with it.
+    pub message: String,
+}
+
+fn err(item: impl Into<String>, message: impl Into<String>) -> SceneError {
+    SceneError { item: item.into(), message: message.into() }
+}
+
+impl Scene {
+    /// Checks the scene: every shape has at least 2 finite vertices (3 when
+    /// closed) and no zero-length wall; there is at least one wall; the sensor
+    /// and odometry values are valid; the trajectory has a positive speed, yaw
+    /// rate and scan rate, stays within the walls' bounds and never passes
+    /// through a wall or obstacle.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        for (kind, shapes) in [("walls", &self.walls), ("obstacles", &self.obstacles)] {
+            for (i, shape) in shapes.iter().enumerate() {
+                let item = shape_item(kind, i, shape);
+                let min = if shape.closed { 3 } else { 2 };
+                if shape.points.len() < min {
+                    return Err(err(
+                        item,
+                        format!("needs at least {min} vertices, has {}", shape.points.len()),
+                    ));
+                }
+                for (k, p) in shape.points.iter().enumerate() {
+                    if !p[0].is_finite() || !p[1].is_finite() {
+                        return Err(err(item, format!("vertex {k} is not finite: {p:?}")));
+                    }
+                }
+                for (k, (a, b)) in segments(shape).enumerate() {
+                    if (b - a).norm() < 1e-9 {
+                        return Err(err(item, format!("segment {k} has zero length at {a}")));
+                    }
+                }
+            }
+        }
+        if self.walls.is_empty() && self.obstacles.is_empty() {
+            return Err(err("walls", "the scene has no walls"));
+        }
+        self.sensor_model().validate().map_err(|e| err("sensor", e.to_string()))?;
+        self.odometry_model().validate().map_err(|e| err("odometry", e.to_string()))?;
+        let t = &self.trajectory;
+        for (item, v) in [
+            ("trajectory.speed_m_s", t.speed_m_s),
+            ("trajectory.yaw_rate_deg_s", t.yaw_rate_deg_s),
+            ("trajectory.scan_rate_hz", t.scan_rate_hz.unwrap_or(1.0)),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(err(item, format!("must be finite and > 0, is {v}")));
+            }
+        }
+        let start = [t.start.x, t.start.y];
+        if !start.iter().chain([t.start.heading_deg].iter()).all(|v| v.is_finite()) {
+            return Err(err("trajectory.start", "is not finite"));
+        }
+        let (lo, hi) = self.bounds();
+        let mut path = vec![("trajectory.start".to_string(), start)];
+        for (i, w) in t.waypoints.iter().enumerate() {
+            path.push((format!("trajectory.waypoints[{i}]"), *w));
+        }
+        for (item, p) in &path {
+            if !p[0].is_finite() || !p[1].is_finite() {
+                return Err(err(item.clone(), format!("is not finite: {p:?}")));
+            }
+            if p[0] < lo.x || p[0] > hi.x || p[1] < lo.y || p[1] > hi.y {
+                return Err(err(item.clone(), format!("{p:?} lies outside every wall")));
+            }
+        }
+        let mut legs: Vec<_> = path.windows(2).map(|w| (w[1].0.clone(), w[0].1, w[1].1)).collect();
+        if t.laps > 1
+            && let Some(last) = path.last()
+        {
+            legs.push(("trajectory (return to start)".into(), last.1, start));
+        }
+        for (item, a, b) in legs {
+            let (a, b) = (Point2::new(a[0], a[1]), Point2::new(b[0], b[1]));
+            for w in self.world_walls() {
+                if segments_cross(&a, &b, &w.a, &w.b) {
+                    let shape = self.shape_label(w.shape);
+                    return Err(err(
+                        item,
+                        format!("the path from {a} to {b} passes through {shape}"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The wall segments of all shapes, walls first, then obstacles.
+    pub fn world_walls(&self) -> Vec<Wall> {
+        self.walls
+            .iter()
+            .chain(self.obstacles.iter())
+            .enumerate()
+            .flat_map(|(shape, s)| segments(s).map(move |(a, b)| Wall { a, b, shape }))
+            .filter(|w| (w.b - w.a).norm() >= 1e-9)
+            .collect()
+    }
+
+    /// The indexed world.
+    pub fn world(&self) -> World {
+        World::new(self.world_walls())
+    }
+
+    /// A label of shape `index` (walls first, then obstacles), for messages and ground truth.
+    pub fn shape_label(&self, index: usize) -> String {
+        if index < self.walls.len() {
+            shape_item("walls", index, &self.walls[index])
+        } else {
+            let i = index - self.walls.len();
+            self.obstacles
+                .get(i)
+                .map_or_else(|| format!("shape {index}"), |s| shape_item("obstacles", i, s))
+        }
+    }
+
+    /// Axis-aligned bounds of all vertices.
+    pub fn bounds(&self) -> (Point2<f64>, Point2<f64>) {
+        let mut lo = Point2::new(f64::INFINITY, f64::INFINITY);
+        let mut hi = Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for s in self.walls.iter().chain(self.obstacles.iter()) {
+            for p in &s.points {
+                lo = Point2::new(lo.x.min(p[0]), lo.y.min(p[1]));
+                hi = Point2::new(hi.x.max(p[0]), hi.y.max(p[1]));
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The sensor model with this scene's overrides.
+    pub fn sensor_model(&self) -> SensorModel {
+        let s = &self.sensor;
+        let mut m = match s.model {
+            SensorKind::Utm30lxEw => SensorModel::utm30lx_ew(),
+            SensorKind::SickLms180 => SensorModel::sick_lms_180(),
+        };
+        if let Some(sigma) = s.range_sigma_m {
+            m.noise = RangeNoise::constant(sigma);
+        }
+        m.faults.outlier_probability = s.outlier_probability;
+        m.faults.dropout_probability = s.dropout_probability;
+        m.faults.mixed_pixel_probability = s.mixed_pixel_probability;
+        m.motion_skew = s.motion_skew;
+        m.tilt = s.tilt.map(|t| Tilt {
+            roll_amplitude_rad: t.roll_amplitude_deg.to_radians(),
+            pitch_amplitude_rad: t.pitch_amplitude_deg.to_radians(),
+            period_s: t.period_s,
+        });
+        if let Some(rate) = self.trajectory.scan_rate_hz {
+            m.rate_hz = rate;
+        }
+        m
+    }
+
+    /// The true motion.
+    pub fn trajectory(&self) -> Trajectory {
+        let t = &self.trajectory;
+        let waypoints: Vec<_> = t.waypoints.iter().map(|p| Point2::new(p[0], p[1])).collect();
+        Trajectory::new(
+            Pose2::new(t.start.x, t.start.y, t.start.heading_deg.to_radians()),
+            &waypoints,
+            t.speed_m_s,
+            t.yaw_rate_deg_s.to_radians(),
+            t.laps,
+        )
+    }
+
+    /// The odometry error model.
+    pub fn odometry_model(&self) -> OdometryModel {
+        let o = &self.odometry;
+        OdometryModel {
+            heading_rate_bias_rad_s: o.heading_rate_bias_deg_s.to_radians(),
+            heading_random_walk_rad_sqrt_s: o.heading_random_walk_deg_sqrt_s.to_radians(),
+            speed_scale_error: o.speed_scale_error,
+            position_random_walk_m_sqrt_s: o.position_random_walk_m_sqrt_s,
+        }
+    }
+}
+
+fn shape_item(kind: &str, i: usize, shape: &Shape) -> String {
+    if shape.name.is_empty() {
+        format!("{kind}[{i}]")
+    } else {
+        format!("{kind}[{i}] \"{}\"", shape.name)
+    }
+}
+
+/// The segments of a shape, closing it when asked.
+fn segments(shape: &Shape) -> impl Iterator<Item = (Point2<f64>, Point2<f64>)> + '_ {
+    let pts = &shape.points;
+    let n = pts.len();
+    let count = if shape.closed && n >= 3 { n } else { n.saturating_sub(1) };
+    (0..count).map(move |i| {
+        let (a, b) = (pts[i], pts[(i + 1) % n]);
+        (Point2::new(a[0], a[1]), Point2::new(b[0], b[1]))
+    })
+}
+
+/// True when segments `a-b` and `c-d` properly cross or touch.
+fn segments_cross(a: &Point2<f64>, b: &Point2<f64>, c: &Point2<f64>, d: &Point2<f64>) -> bool {
+    let cross = |o: &Point2<f64>, p: &Point2<f64>, q: &Point2<f64>| {
+        (p.x - o.x) * (q.y - o.y) - (p.y - o.y) * (q.x - o.x)
+    };
+    let (d1, d2) = (cross(c, d, a), cross(c, d, b));
+    let (d3, d4) = (cross(a, b, c), cross(a, b, d));
+    d1 * d2 <= 0.0 && d3 * d4 <= 0.0 && (d1 != 0.0 || d2 != 0.0 || d3 != 0.0 || d4 != 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square_scene() -> Scene {
+        Scene {
+            name: "t".into(),
+            description: String::new(),
+            sensor: SensorSpec::default(),
+            walls: vec![Shape {
+                name: "outer".into(),
+                points: vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]],
+                closed: true,
+            }],
+            obstacles: vec![],
+            trajectory: TrajectorySpec {
+                start: StartPose { x: 1.0, y: 1.0, heading_deg: 0.0 },
+                waypoints: vec![[9.0, 1.0], [9.0, 9.0]],
+                speed_m_s: 1.0,
+                yaw_rate_deg_s: 90.0,
+                laps: 1,
+                scan_rate_hz: None,
+            },
+            odometry: OdometrySpec::default(),
+        }
+    }
+
+    #[test]
+    fn valid_scene() {
+        let s = square_scene();
+        assert_eq!(s.validate(), Ok(()));
+        assert_eq!(s.world_walls().len(), 4);
+    }
+
+    #[test]
+    fn errors_name_the_item() {
+        let mut s = square_scene();
+        s.walls[0].points.truncate(1);
+        assert!(
+            s.validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("walls[0] \"outer\": needs at least 3")
+        );
+
+        let mut s = square_scene();
+        s.walls[0].points[1] = [0.0, 0.0];
+        assert!(s.validate().unwrap_err().to_string().contains("zero length"));
+
+        let mut s = square_scene();
+        s.walls[0].points[2] = [f64::NAN, 1.0];
+        assert!(s.validate().unwrap_err().to_string().contains("vertex 2 is not finite"));
+
+        let mut s = square_scene();
+        s.trajectory.speed_m_s = -1.0;
+        assert_eq!(s.validate().unwrap_err().item, "trajectory.speed_m_s");
+
+        let mut s = square_scene();
+        s.trajectory.waypoints.push([20.0, 5.0]);
+        let e = s.validate().unwrap_err();
+        assert_eq!(e.item, "trajectory.waypoints[2]");
+        assert!(e.message.contains("outside every wall"));
+
+        let mut s = square_scene();
+        s.obstacles.push(Shape {
+            name: "box".into(),
+            points: vec![[4.0, 0.5], [5.0, 0.5], [5.0, 1.5], [4.0, 1.5]],
+            closed: true,
+        });
+        let e = s.validate().unwrap_err();
+        assert_eq!(e.item, "trajectory.waypoints[0]");
+        assert!(e.message.contains("obstacles[0] \"box\""), "{e}");
+
+        let mut s = square_scene();
+        s.sensor.outlier_probability = 2.0;
+        assert_eq!(s.validate().unwrap_err().item, "sensor");
+    }
+}
