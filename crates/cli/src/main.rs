@@ -1,0 +1,60 @@
+//! `pcaline`: line detection, line mapping and localization aiding for 2D
+//! LIDAR, on simulated scenes and real logs.
+//!
+//! Exit codes: 0 success, 2 bad input (unreadable, malformed or invalid file,
+//! bad argument value), 1 any other failure. Results go to stdout or to files;
+//! messages and progress go to stderr.
+
+// The one crate that talks to a terminal.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
+
+mod exit;
+mod progress;
+mod run;
+mod scene_cmd;
+mod svg;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// PCA-based line detection from 2D LIDAR range data (Opromolla et al. 2017), and beyond.
+#[derive(Debug, Parser)]
+#[command(name = "pcaline", version, about, long_about = None, after_help = EXAMPLES)]
+struct Cli {
+    /// Print nothing but results and errors.
+    #[arg(long, short, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+const EXAMPLES: &str = "Examples:
+  pcaline run                                   simulate the default maze, detect, summarise
+  pcaline run sim-scenes/hall-pillars.toml --seed 3 --out out/hall
+  pcaline scene check sim-scenes/*.toml
+  pcaline scene generate --seed 7 --cols 6 --rows 4 -o my-maze.toml";
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Simulate a scene (default: the embedded paper-like maze), detect lines
+    /// in every scan, and write pictures and JSON to an output folder.
+    Run(run::RunArgs),
+    /// Generate, check or draw scene files.
+    #[command(subcommand)]
+    Scene(scene_cmd::SceneCommand),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run(args) => run::run(&args, cli.quiet),
+        Command::Scene(cmd) => scene_cmd::run(&cmd, cli.quiet),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            exit::code_for(&err)
+        }
+    }
+}

@@ -1,0 +1,247 @@
+//! A small SVG plot writer: world coordinates in metres mapped to pixels with
+//! the y axis up, axes with metre ticks, and a legend.
+
+use std::fmt::Write;
+
+/// An SVG plot of a rectangle of the world, y up.
+pub struct Plot {
+    min: [f64; 2],
+    max: [f64; 2],
+    scale: f64,
+    margin: f64,
+    width: f64,
+    height: f64,
+    body: String,
+    legend: Vec<(String, String, bool)>,
+}
+
+impl Plot {
+    /// A plot of the box `min`..`max` (metres) about `width_px` wide.
+    pub fn new(mut min: [f64; 2], mut max: [f64; 2], width_px: f64) -> Self {
+        for k in 0..2 {
+            let span = max[k] - min[k];
+            if span.is_nan() || span <= 1e-6 {
+                min[k] -= 1.0;
+                max[k] += 1.0;
+            }
+        }
+        let pad = 0.03 * (max[0] - min[0]).max(max[1] - min[1]);
+        let (min, max) = ([min[0] - pad, min[1] - pad], [max[0] + pad, max[1] + pad]);
+        let margin = 60.0;
+        let scale = (width_px - 2.0 * margin) / (max[0] - min[0]);
+        let height = (max[1] - min[1]) * scale + 2.0 * margin;
+        Plot {
+            min,
+            max,
+            scale,
+            margin,
+            width: width_px,
+            height,
+            body: String::new(),
+            legend: Vec::new(),
+        }
+    }
+
+    fn px(&self, p: [f64; 2]) -> (f64, f64) {
+        (
+            self.margin + (p[0] - self.min[0]) * self.scale,
+            self.height - self.margin - (p[1] - self.min[1]) * self.scale,
+        )
+    }
+
+    /// A straight segment.
+    pub fn line(&mut self, a: [f64; 2], b: [f64; 2], color: &str, width: f64) {
+        let ((x1, y1), (x2, y2)) = (self.px(a), self.px(b));
+        let _ = writeln!(
+            self.body,
+            r#"<line x1="{x1:.1}" y1="{y1:.1}" x2="{x2:.1}" y2="{y2:.1}" stroke="{color}" stroke-width="{width}" stroke-linecap="round"/>"#
+        );
+    }
+
+    /// A polyline.
+    pub fn polyline(&mut self, points: &[[f64; 2]], color: &str, width: f64, dashed: bool) {
+        if points.len() < 2 {
+            return;
+        }
+        let pts: Vec<String> = points
+            .iter()
+            .map(|p| {
+                let (x, y) = self.px(*p);
+                format!("{x:.1},{y:.1}")
+            })
+            .collect();
+        let dash = if dashed { r#" stroke-dasharray="6,4""# } else { "" };
+        let _ = writeln!(
+            self.body,
+            r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="{width}"{dash}/>"#,
+            pts.join(" ")
+        );
+    }
+
+    /// Text at a world position.
+    pub fn label(&mut self, at: [f64; 2], text: &str, color: &str) {
+        let (x, y) = self.px(at);
+        let _ = writeln!(
+            self.body,
+            r#"<text x="{x:.1}" y="{y:.1}" font-size="13" fill="{color}" font-family="sans-serif">{}</text>"#,
+            escape(text)
+        );
+    }
+
+    /// Adds a legend entry (a line sample, or a dot when `dot`).
+    pub fn legend(&mut self, text: &str, color: &str, dot: bool) {
+        self.legend.push((text.to_string(), color.to_string(), dot));
+    }
+
+    /// The finished document with a title, axes in metres and the legend.
+    pub fn finish(self, title: &str) -> String {
+        let mut out = String::new();
+        let (w, h) = (self.width, self.height);
+        let _ = writeln!(
+            out,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" viewBox="0 0 {w:.0} {h:.0}">"#
+        );
+        let _ = writeln!(out, r#"<rect width="100%" height="100%" fill="white"/>"#);
+        let _ = writeln!(
+            out,
+            r#"<text x="{:.1}" y="30" font-size="18" font-family="sans-serif" text-anchor="middle">{}</text>"#,
+            w / 2.0,
+            escape(title)
+        );
+        // Axes with ticks at a round step.
+        let span = (self.max[0] - self.min[0]).max(self.max[1] - self.min[1]);
+        let step = nice_step(span / 8.0);
+        let (x0, y0) = self.px(self.min);
+        let (x1, y1) = self.px(self.max);
+        let _ = writeln!(
+            out,
+            r##"<rect x="{x0:.1}" y="{y1:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#999"/>"##,
+            x1 - x0,
+            y0 - y1
+        );
+        let mut t = (self.min[0] / step).ceil() * step;
+        while t <= self.max[0] {
+            let (x, _) = self.px([t, self.min[1]]);
+            let _ = writeln!(
+                out,
+                r##"<line x1="{x:.1}" y1="{y0:.1}" x2="{x:.1}" y2="{:.1}" stroke="#999"/><text x="{x:.1}" y="{:.1}" font-size="12" text-anchor="middle" font-family="sans-serif">{}</text>"##,
+                y0 + 5.0,
+                y0 + 19.0,
+                fmt_tick(t)
+            );
+            t += step;
+        }
+        let mut t = (self.min[1] / step).ceil() * step;
+        while t <= self.max[1] {
+            let (_, y) = self.px([self.min[0], t]);
+            let _ = writeln!(
+                out,
+                r##"<line x1="{:.1}" y1="{y:.1}" x2="{x0:.1}" y2="{y:.1}" stroke="#999"/><text x="{:.1}" y="{:.1}" font-size="12" text-anchor="end" font-family="sans-serif">{}</text>"##,
+                x0 - 5.0,
+                x0 - 8.0,
+                y + 4.0,
+                fmt_tick(t)
+            );
+            t += step;
+        }
+        let _ = writeln!(
+            out,
+            r#"<text x="{:.1}" y="{:.1}" font-size="13" text-anchor="middle" font-family="sans-serif">x (m)</text>"#,
+            (x0 + x1) / 2.0,
+            h - 12.0
+        );
+        let _ = writeln!(
+            out,
+            r#"<text x="16" y="{:.1}" font-size="13" text-anchor="middle" font-family="sans-serif" transform="rotate(-90 16 {:.1})">y (m)</text>"#,
+            (y0 + y1) / 2.0,
+            (y0 + y1) / 2.0
+        );
+        out.push_str(&self.body);
+        // Legend, top right inside the frame.
+        let lx = x1 - 200.0;
+        let mut ly = y1 + 18.0;
+        if !self.legend.is_empty() {
+            let _ = writeln!(
+                out,
+                r##"<rect x="{:.1}" y="{:.1}" width="195" height="{:.1}" fill="white" fill-opacity="0.85" stroke="#ccc"/>"##,
+                lx - 8.0,
+                y1 + 4.0,
+                self.legend.len() as f64 * 20.0 + 8.0
+            );
+        }
+        for (text, color, dot) in &self.legend {
+            if *dot {
+                let _ = writeln!(
+                    out,
+                    r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{color}"/>"#,
+                    lx + 10.0,
+                    ly - 4.0
+                );
+            } else {
+                let _ = writeln!(
+                    out,
+                    r#"<line x1="{lx:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{color}" stroke-width="3"/>"#,
+                    ly - 4.0,
+                    lx + 22.0,
+                    ly - 4.0
+                );
+            }
+            let _ = writeln!(
+                out,
+                r#"<text x="{:.1}" y="{ly:.1}" font-size="13" font-family="sans-serif">{}</text>"#,
+                lx + 30.0,
+                escape(text)
+            );
+            ly += 20.0;
+        }
+        out.push_str("</svg>\n");
+        out
+    }
+}
+
+fn nice_step(raw: f64) -> f64 {
+    let mag = 10f64.powf(raw.max(1e-9).log10().floor());
+    let f = raw / mag;
+    mag * if f < 1.5 {
+        1.0
+    } else if f < 3.5 {
+        2.0
+    } else if f < 7.5 {
+        5.0
+    } else {
+        10.0
+    }
+}
+
+fn fmt_tick(t: f64) -> String {
+    let t = if t.abs() < 1e-9 { 0.0 } else { t };
+    if (t - t.round()).abs() < 1e-9 { format!("{}", t.round()) } else { format!("{t:.1}") }
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plot_is_well_formed() {
+        let mut p = Plot::new([0.0, 0.0], [10.0, 5.0], 800.0);
+        p.line([0.0, 0.0], [10.0, 5.0], "black", 2.0);
+        p.legend("walls <true>", "black", false);
+        let s = p.finish("t & t");
+        assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
+        assert!(s.contains("walls &lt;true&gt;") && s.contains("t &amp; t"));
+        assert_eq!(nice_step(1.3), 1.0);
+        assert_eq!(nice_step(2.6), 2.0);
+        assert_eq!(nice_step(0.06), 0.05);
+    }
+
+    #[test]
+    fn degenerate_bounds_do_not_divide_by_zero() {
+        let p = Plot::new([1.0, 1.0], [1.0, 1.0], 400.0);
+        assert!(p.finish("x").contains("<svg"));
+    }
+}
