@@ -94,7 +94,15 @@ fn algorithm_crates_do_no_io_and_print_nothing() {
             let text = std::fs::read_to_string(&file).unwrap();
             // Only the non-test part of the file counts.
             let code = text.split("#[cfg(test)]").next().unwrap();
-            for banned in ["std::fs", "std::io", "std::net", "println!", "eprintln!", "print!(", "std::process"] {
+            for banned in [
+                "std::fs",
+                "std::io",
+                "std::net",
+                "println!",
+                "eprintln!",
+                "print!(",
+                "std::process",
+            ] {
                 assert!(!code.contains(banned), "{} uses {banned}", file.display());
             }
         }
