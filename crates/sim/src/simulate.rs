@@ -107,6 +107,8 @@ pub struct Simulator {
     trajectory: Trajectory,
     true_poses: Vec<Pose2>,
     odometry_poses: Vec<Pose2>,
+    /// cos and sin of each beam's bearing in the sensor frame.
+    bearings: Vec<(f64, f64)>,
     seed: u64,
 }
 
@@ -138,7 +140,14 @@ impl Simulator {
         let count = (trajectory.duration_s() / dt).floor() as usize + 1;
         let true_poses: Vec<_> = (0..count).map(|k| trajectory.pose_at(k as f64 * dt)).collect();
         let odometry_poses = odometry.corrupt(&true_poses, dt, seed);
-        Ok(Simulator { world, sensor, trajectory, true_poses, odometry_poses, seed })
+        let bearings = (0..sensor.beams)
+            .map(|i| {
+                let (s, c) =
+                    (sensor.angle_min_rad + i as f64 * sensor.angle_increment_rad).sin_cos();
+                (c, s)
+            })
+            .collect();
+        Ok(Simulator { world, sensor, trajectory, true_poses, odometry_poses, bearings, seed })
     }
 
     /// Number of scans along the trajectory.
@@ -202,15 +211,28 @@ impl Simulator {
     ) -> (Scan, Vec<BeamTruth>) {
         let s = &self.sensor;
         let mut beams = Vec::with_capacity(s.beams);
+        let mut hint = None;
+        let (mut sin_h, mut cos_h) = world_from_sensor.heading.sin_cos();
         for i in 0..s.beams {
             let t = time_s + if s.motion_skew { i as f64 * s.beam_period_s() } else { 0.0 };
             let pose = if s.motion_skew { self.trajectory.pose_at(t) } else { *world_from_sensor };
-            let bearing = s.angle_min_rad + i as f64 * s.angle_increment_rad;
-            let (bearing_h, horizontal) = tilted_bearing(s, bearing, t);
-            let world_angle = pose.heading + bearing_h;
-            let dir = Vector2::new(world_angle.cos(), world_angle.sin());
+            if s.motion_skew {
+                (sin_h, cos_h) = pose.heading.sin_cos();
+            }
+            // The beam's direction in the sensor frame, then rotated into the world.
+            let ((c, sn), horizontal) = match s.tilt {
+                None => (self.bearings[i], 1.0),
+                Some(_) => {
+                    let bearing = s.angle_min_rad + i as f64 * s.angle_increment_rad;
+                    let (b, h) = tilted_bearing(s, bearing, t);
+                    let (sb, cb) = b.sin_cos();
+                    ((cb, sb), h)
+                }
+            };
+            let dir = Vector2::new(cos_h * c - sin_h * sn, sin_h * c + cos_h * sn);
             let origin = Point2::new(pose.x, pose.y);
-            let hit = self.world.cast(&origin, &dir, s.range_max_m * horizontal);
+            let hit = self.world.cast_hinted(&origin, &dir, s.range_max_m * horizontal, hint);
+            hint = hit.map(|h| h.wall).or(hint);
             beams.push(match hit {
                 Some(h) => BeamTruth {
                     wall: Some(h.wall),

@@ -4,8 +4,7 @@
 
 use parry2d::bounding_volume::Aabb;
 use parry2d::math::Vector as GlamVec;
-use parry2d::partitioning::{Bvh, BvhBuildStrategy};
-use parry2d::query::Ray;
+use parry2d::partitioning::{Bvh, BvhBuildStrategy, TraversalAction};
 use pcaline_geometry::{Point2, Vector2};
 
 /// One straight wall segment of the world.
@@ -67,27 +66,53 @@ impl World {
         dir: &Vector2<f64>,
         max_distance_m: f64,
     ) -> Option<Hit> {
-        if self.walls.is_empty() {
-            return None;
+        self.cast_hinted(origin, dir, max_distance_m, None)
+    }
+
+    /// As [`World::cast`], testing wall `hint` first. Consecutive beams of a
+    /// scan mostly hit the same wall: its distance bounds the search, so the
+    /// BVH traversal prunes almost everything else.
+    pub fn cast_hinted(
+        &self,
+        origin: &Point2<f64>,
+        dir: &Vector2<f64>,
+        max_distance_m: f64,
+        hint: Option<u32>,
+    ) -> Option<Hit> {
+        let mut best_t = max_distance_m;
+        let mut best_wall = None;
+        if let Some(h) = hint
+            && let Some(w) = self.walls.get(h as usize)
+            && let Some(t) = ray_segment(origin, dir, w)
+            && t <= best_t
+        {
+            best_t = t;
+            best_wall = Some(h);
         }
-        let ray = Ray::new(
-            GlamVec::new(origin.x as f32, origin.y as f32),
-            GlamVec::new(dir.x as f32, dir.y as f32),
-        );
-        // The BVH works in f32: allow a little slack, then re-check exactly.
-        let slack = 1e-3;
-        let (wall, _) =
-            self.bvh.cast_ray(&ray, (max_distance_m + slack) as f32, |leaf, best| {
-                ray_segment(origin, dir, &self.walls[leaf as usize])
-                    .filter(|t| *t <= f64::from(best) + slack)
-                    .map(|t| t as f32)
-            })?;
-        let distance_m = ray_segment(origin, dir, &self.walls[wall as usize])?;
-        (distance_m <= max_distance_m).then(|| Hit {
-            wall,
-            distance_m,
-            point: origin + dir * distance_m,
-        })
+        // Slab test against node boxes in f32, with slack for the rounding;
+        // the exact test of each candidate wall is in f64.
+        let (ox, oy) = (origin.x as f32, origin.y as f32);
+        let (ix, iy) = (1.0 / dir.x as f32, 1.0 / dir.y as f32);
+        let slack = 1e-3f32;
+        self.bvh.traverse(|node| {
+            let (lo, hi) = (node.mins(), node.maxs());
+            let (tx1, tx2) = ((lo.x - ox) * ix, (hi.x - ox) * ix);
+            let (ty1, ty2) = ((lo.y - oy) * iy, (hi.y - oy) * iy);
+            let enter = tx1.min(tx2).max(ty1.min(ty2)).max(0.0);
+            let exit = tx1.max(tx2).min(ty1.max(ty2));
+            if enter > exit + slack || enter > best_t as f32 + slack {
+                return TraversalAction::Prune;
+            }
+            if let Some(leaf) = node.leaf_data()
+                && let Some(t) = ray_segment(origin, dir, &self.walls[leaf as usize])
+                && t < best_t
+            {
+                best_t = t;
+                best_wall = Some(leaf);
+            }
+            TraversalAction::Continue
+        });
+        best_wall.map(|wall| Hit { wall, distance_m: best_t, point: origin + dir * best_t })
     }
 
     /// The nearest hit by testing every wall (no index): the reference the
@@ -156,12 +181,15 @@ mod tests {
         ) {
             let world = World::new(walls.iter().map(|&(x, y, dx, dy)| wall(x, y, x + dx, y + dy)).collect());
             let dir = Vector2::new(angle.cos(), angle.sin());
-            let a = world.cast(&Point2::new(0.5, 0.25), &dir, 30.0);
-            let b = world.cast_brute_force(&Point2::new(0.5, 0.25), &dir, 30.0);
-            match (a, b) {
-                (None, None) => {}
-                (Some(a), Some(b)) => prop_assert!((a.distance_m - b.distance_m).abs() < 1e-6),
-                _ => prop_assert!(false, "{a:?} vs {b:?}"),
+            let origin = Point2::new(0.5, 0.25);
+            let b = world.cast_brute_force(&origin, &dir, 30.0);
+            for hint in [None, Some(0), Some(walls.len() as u32 - 1), Some(u32::MAX)] {
+                let a = world.cast_hinted(&origin, &dir, 30.0, hint);
+                match (a, b) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) => prop_assert!((a.distance_m - b.distance_m).abs() < 1e-9),
+                    _ => prop_assert!(false, "{a:?} vs {b:?}"),
+                }
             }
         }
     }
