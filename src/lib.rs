@@ -35,3 +35,8 @@ pub use pcaline_geometry as geometry;
 pub use pcaline_segmentation as segmentation;
 
 pub use pcaline_geometry::{ConfigError, LineSegment, Point2, Pose2, RangeNoise, Scan, Vector2};
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -95,3 +95,14 @@ fn malformed_scenes_name_file_and_item() {
     let missing = read_scene(Path::new("no/such/scene.toml")).unwrap_err().to_string();
     assert!(missing.starts_with("no/such/scene.toml:"), "{missing}");
 }
+
+#[test]
+fn schema_example_in_the_scene_readme_is_valid() {
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("sim-scenes/README.md"))
+            .unwrap();
+    let example = readme.split("```toml\n").nth(1).and_then(|s| s.split("```").next()).unwrap();
+    let path = write_tmp("readme-example.toml", example);
+    let scene = read_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.name, "example");
+}
