@@ -16,6 +16,8 @@ use std::ops::Range;
 pub struct DetectedLine {
     /// The line in the sensor frame.
     pub line: LineSegment,
+    /// Moments of the fitted points, sensor frame (for maps that refine lines).
+    pub moments: Moments,
     /// Index of the first point (in [`Detection::points`]).
     pub first_point: usize,
     /// Index of the last point, inclusive. Smaller than `first_point` only for
@@ -194,6 +196,7 @@ impl LineDetector {
             if let Some(line) = line_from_moments(&piece.moments, &first, &last) {
                 self.lines.push(DetectedLine {
                     line,
+                    moments: piece.moments,
                     first_point: piece.first,
                     last_point: piece.last,
                     first_beam: self.points.beam[piece.first],

@@ -5,7 +5,8 @@
 //! This facade ties the layered crates together: [`LineDetector`] runs the
 //! whole detection pipeline on a [`Scan`] (eq. 1, level-1 and level-2
 //! clustering, PCA fit with the eigenvalue-ratio test, merge of collinear
-//! pieces), with [`Config::paper`] reproducing the paper exactly.
+//! pieces), with [`Config::paper`] reproducing the paper exactly; [`Mapper`]
+//! adds the line map and localization aiding of the paper's section 2.1.
 //!
 //! ```
 //! use pcaline::{Config, LineDetector, Scan};
@@ -26,12 +27,16 @@
 
 mod config;
 mod detector;
+mod mapper;
 
 pub use config::Config;
 pub use detector::{DetectedLine, Detection, LineDetector};
+pub use mapper::{Mapper, MapperConfig, MapperStep};
 
+pub use pcaline_aiding as aiding;
 pub use pcaline_fitting as fitting;
 pub use pcaline_geometry as geometry;
+pub use pcaline_mapping as mapping;
 pub use pcaline_segmentation as segmentation;
 
 pub use pcaline_geometry::{ConfigError, LineSegment, Point2, Pose2, RangeNoise, Scan, Vector2};

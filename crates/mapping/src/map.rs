@@ -1,0 +1,395 @@
+//! [`LineMap`]: the incremental line map of the paper's section 2.1:
+//! matching new lines against map lines (eq. 8-10), endpoint update by
+//! projection, and the refined variant that keeps every absorbed point's sums.
+
+use crate::grid::Grid;
+use crate::{LineDistance, MapConfig, line_distance};
+use pcaline_fitting::{Moments, line_from_moments};
+use pcaline_geometry::{ConfigError, LineSegment, Point2};
+
+/// A stable identifier of a map line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct LineId(pub u64);
+
+/// A line of the map, in the world frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapLine {
+    /// Stable identifier.
+    pub id: LineId,
+    /// The line and its extent.
+    pub line: LineSegment,
+    /// Sums of every point absorbed (used when the map refines its lines).
+    pub moments: Moments,
+    /// Number of detected lines merged into this one (1 when new).
+    pub observations: u32,
+    /// The most extreme endpoints observed on each side (for the robust extent).
+    pub extremes: Extremes,
+}
+
+/// The extent of a map line: the accepted endpoints and, with the robust
+/// rule, extensions seen once and waiting for confirmation. Points are in the
+/// world frame and re-projected whenever the line is refitted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Extremes {
+    /// Accepted first endpoint.
+    pub low: Point2<f64>,
+    /// Accepted last endpoint.
+    pub high: Point2<f64>,
+    /// Unconfirmed extensions beyond `low`.
+    pub pending_low: [Option<Point2<f64>>; 2],
+    /// Unconfirmed extensions beyond `high`.
+    pub pending_high: [Option<Point2<f64>>; 2],
+}
+
+/// How close a second observation must come to an extension to confirm it, metres.
+const CONFIRM_M: f64 = 0.05;
+
+impl Extremes {
+    fn of(line: &LineSegment) -> Self {
+        Extremes {
+            low: line.start,
+            high: line.end,
+            pending_low: [None; 2],
+            pending_high: [None; 2],
+        }
+    }
+
+    /// Adds the endpoints of a new observation. Without `robust`, the extent
+    /// grows to any endpoint beyond it (the paper). With `robust`, an endpoint
+    /// beyond the extent is accepted only as far as another observation
+    /// beyond it (or within 5 cm of it) confirms; otherwise it waits.
+    fn add(&mut self, line: &LineSegment, points: [Point2<f64>; 2], robust: bool) {
+        let s = |p: &Point2<f64>| (p - line.centroid).dot(&line.direction);
+        let (a, b) = if s(&points[0]) <= s(&points[1]) {
+            (points[0], points[1])
+        } else {
+            (points[1], points[0])
+        };
+        let (lo, hi) = if s(&self.low) <= s(&self.high) {
+            (self.low, self.high)
+        } else {
+            (self.high, self.low)
+        };
+        // Work on the low side with s and on the high side with -s.
+        let (new_lo, pend_lo) = extend(lo, a, self.pending_low, robust, |p| s(p));
+        let (new_hi, pend_hi) = extend(hi, b, self.pending_high, robust, |p| -s(p));
+        *self = Extremes { low: new_lo, high: new_hi, pending_low: pend_lo, pending_high: pend_hi };
+    }
+
+    /// The accepted extent `(lo, hi)` along `line`.
+    fn extent(&self, line: &LineSegment) -> (f64, f64) {
+        let s = |p: &Point2<f64>| (p - line.centroid).dot(&line.direction);
+        let (lo, hi) = (s(&self.low), s(&self.high));
+        if lo <= hi { (lo, hi) } else { (hi, lo) }
+    }
+}
+
+/// One side of [`Extremes::add`]; `key` grows towards the inside of the line.
+fn extend(
+    accepted: Point2<f64>,
+    candidate: Point2<f64>,
+    mut pending: [Option<Point2<f64>>; 2],
+    robust: bool,
+    key: impl Fn(&Point2<f64>) -> f64,
+) -> (Point2<f64>, [Option<Point2<f64>>; 2]) {
+    if key(&candidate) >= key(&accepted) {
+        return (accepted, pending);
+    }
+    if !robust {
+        return (candidate, pending);
+    }
+    // A pending extension reaching as far as the candidate (within the
+    // tolerance) confirms it up to the less extreme of the two.
+    let mut accepted = accepted;
+    let mut confirmed = false;
+    for p in pending.iter().flatten() {
+        if key(p) <= key(&candidate) + CONFIRM_M {
+            let reach = if key(p) >= key(&candidate) { *p } else { candidate };
+            if key(&reach) < key(&accepted) {
+                accepted = reach;
+            }
+            confirmed = true;
+        }
+    }
+    if !confirmed {
+        // Keep the two most extreme unconfirmed extensions.
+        let mut all: Vec<Point2<f64>> =
+            pending.iter().flatten().copied().chain([candidate]).collect();
+        all.sort_by(|x, y| key(x).total_cmp(&key(y)));
+        pending = [all.first().copied(), all.get(1).copied()];
+    }
+    // Pending points no longer beyond the extent are dropped.
+    for p in pending.iter_mut() {
+        if p.is_some_and(|q| key(&q) >= key(&accepted)) {
+            *p = None;
+        }
+    }
+    (accepted, pending)
+}
+
+/// A map line matched by a new line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Match {
+    /// Index of the map line in [`LineMap::lines`].
+    pub index: usize,
+    /// Its identifier.
+    pub id: LineId,
+    /// The metrics of the match.
+    pub distance: LineDistance,
+}
+
+/// An incremental map of lines with a spatial index.
+#[derive(Debug, Clone)]
+pub struct LineMap {
+    config: MapConfig,
+    lines: Vec<MapLine>,
+    grid: Grid,
+    next_id: u64,
+}
+
+impl LineMap {
+    /// An empty map; an invalid configuration is a [`ConfigError`].
+    pub fn new(config: MapConfig) -> Result<Self, ConfigError> {
+        config.validate()?;
+        Ok(LineMap { grid: Grid::new(config.grid_cell_m), config, lines: Vec::new(), next_id: 0 })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &MapConfig {
+        &self.config
+    }
+
+    /// The map lines, in insertion order.
+    pub fn lines(&self) -> &[MapLine] {
+        &self.lines
+    }
+
+    /// Number of map lines.
+    pub fn len(&self) -> usize {
+        self.lines.len()
+    }
+
+    /// True when the map has no lines.
+    pub fn is_empty(&self) -> bool {
+        self.lines.is_empty()
+    }
+
+    /// The map line that `line` (world frame) matches: among the lines with
+    /// `|d_alpha|` and `d_rho` below their thresholds, the one with the
+    /// smallest `d_rho` (paper, section 2.1). Only lines near `line`'s
+    /// centroid are examined (spatial index). `None` for no match or a
+    /// non-finite line.
+    pub fn find_match(&self, line: &LineSegment) -> Option<Match> {
+        if !(line.alpha.is_finite()
+            && line.d.is_finite()
+            && line.centroid.coords.iter().all(|v| v.is_finite()))
+        {
+            return None;
+        }
+        let mut best: Option<Match> = None;
+        self.grid.for_each_near(&line.centroid, self.config.max_d_rho_m, |id| {
+            let index = id as usize;
+            if best.is_some_and(|b| b.index == index) {
+                return;
+            }
+            let m = &self.lines[index];
+            let distance = line_distance(&m.line, line, self.config.centroid_term);
+            let offset_ok = self.config.max_offset_m.is_none_or(|max| {
+                (m.line.normal().dot(&line.centroid.coords) - m.line.d).abs() < max
+            });
+            if distance.d_alpha.abs() < self.config.max_d_alpha_rad
+                && distance.d_rho < self.config.max_d_rho_m
+                && offset_ok
+                && best.is_none_or(|b| distance.d_rho < b.distance.d_rho)
+            {
+                best = Some(Match { index, id: m.id, distance });
+            }
+        });
+        best
+    }
+
+    /// Adds a detected line (world frame, with the moments of its points in
+    /// the world frame): merged into the map line it matches, or added as a
+    /// new map line. Returns the map line's id and the match, if any.
+    /// Non-finite lines are ignored (returns `None`).
+    pub fn insert(
+        &mut self,
+        line: &LineSegment,
+        moments: &Moments,
+    ) -> Option<(LineId, Option<Match>)> {
+        if !(line.alpha.is_finite()
+            && line.d.is_finite()
+            && line.start.coords.iter().chain(line.end.coords.iter()).all(|v| v.is_finite()))
+        {
+            return None;
+        }
+        match self.find_match(line) {
+            Some(m) => {
+                self.absorb(m.index, line, moments);
+                Some((m.id, Some(m)))
+            }
+            None => {
+                let id = LineId(self.next_id);
+                self.next_id += 1;
+                let index = self.lines.len() as u32;
+                self.grid.insert(index, &line.start, &line.end);
+                self.lines.push(MapLine {
+                    id,
+                    line: *line,
+                    moments: *moments,
+                    observations: 1,
+                    extremes: Extremes::of(line),
+                });
+                Some((id, None))
+            }
+        }
+    }
+
+    /// Merges `line` into map line `index`: the extent grows to the
+    /// projections of the new endpoints (paper); with refinement the line's
+    /// parameters are refitted from the merged sums first.
+    fn absorb(&mut self, index: usize, line: &LineSegment, moments: &Moments) {
+        let refine = self.config.refine;
+        let m = &mut self.lines[index];
+        let old = m.line;
+        let mut base = old;
+        if refine {
+            let merged = m.moments.merge(moments);
+            if let Some(refit) = line_from_moments(&merged, &old.start, &old.end) {
+                base = refit;
+                m.moments = merged;
+            }
+        } else {
+            m.moments = m.moments.merge(moments);
+        }
+        // Extent: along the (possibly refitted) line, from the accepted
+        // endpoint observations.
+        m.extremes.add(&base, [line.start, line.end], self.config.robust_extent);
+        let (lo, hi) = m.extremes.extent(&base);
+        base.start = base.centroid + base.direction * lo;
+        base.end = base.centroid + base.direction * hi;
+        base.n_points = m.moments.n;
+        m.line = base;
+        m.observations += 1;
+        let (a, b) = (m.line.start, m.line.end);
+        self.grid.insert(index as u32, &a, &b);
+    }
+
+    /// Rebuilds a map from saved lines (ids kept; the next id follows the largest).
+    pub fn from_lines(config: MapConfig, lines: Vec<MapLine>) -> Result<Self, ConfigError> {
+        let mut map = LineMap::new(config)?;
+        for (i, l) in lines.iter().enumerate() {
+            map.grid.insert(i as u32, &l.line.start, &l.line.end);
+        }
+        map.next_id = lines.iter().map(|l| l.id.0 + 1).max().unwrap_or(0);
+        map.lines = lines;
+        Ok(map)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::CentroidTerm;
+    use pcaline_geometry::Vector2;
+
+    fn wall(x: f64, y0: f64, y1: f64) -> (LineSegment, Moments) {
+        let pts: Vec<_> =
+            (0..=20).map(|i| Point2::new(x, y0 + (y1 - y0) * i as f64 / 20.0)).collect();
+        let m = Moments::from_points(&pts);
+        (line_from_moments(&m, &pts[0], &pts[20]).unwrap(), m)
+    }
+
+    #[test]
+    fn paper_map_extends_endpoints_and_keeps_parameters() {
+        let mut map = LineMap::new(MapConfig::paper()).unwrap();
+        let (a, ma) = wall(3.0, 0.0, 1.0);
+        let (id, m) = map.insert(&a, &ma).unwrap();
+        assert!(m.is_none());
+        let (b, mb) = wall(3.05, 0.5, 1.5);
+        let (id2, m2) = map.insert(&b, &mb).unwrap();
+        assert_eq!(id, id2);
+        assert!(m2.is_some());
+        let l = &map.lines()[0].line;
+        assert!((l.d - 3.0).abs() < 1e-12, "paper keeps the map line's parameters");
+        assert!((l.length() - 1.5).abs() < 1e-9);
+        assert_eq!(map.lines()[0].observations, 2);
+    }
+
+    #[test]
+    fn refined_map_refits_from_all_points() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        let (a, ma) = wall(3.0, 0.0, 1.0);
+        map.insert(&a, &ma);
+        let (b, mb) = wall(3.1, 1.0, 2.0);
+        map.insert(&b, &mb);
+        // The robust extent waits for a second observation of an extension.
+        assert!((map.lines()[0].line.length() - 1.0).abs() < 0.01);
+        map.insert(&b, &mb);
+        let l = &map.lines()[0].line;
+        assert!((l.length() - 2.0).abs() < 0.01, "{l:?}");
+        assert_eq!(map.lines()[0].moments.n, 63);
+        assert!(l.centroid.x > 3.0 && l.centroid.x < 3.1);
+    }
+
+    #[test]
+    fn a_single_glitch_does_not_extend_a_robust_extent() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        let (a, ma) = wall(3.0, 0.0, 2.0);
+        for _ in 0..5 {
+            map.insert(&a, &ma);
+        }
+        let (glitch, mg) = wall(3.0, 0.5, 2.3);
+        map.insert(&glitch, &mg);
+        assert!((map.lines()[0].line.length() - 2.0).abs() < 0.01);
+        // A second observation reaching 2.1 confirms the extension up to 2.1.
+        let (b, mb) = wall(3.0, 0.5, 2.1);
+        map.insert(&b, &mb);
+        assert!((map.lines()[0].line.length() - 2.1).abs() < 0.01, "{:?}", map.lines()[0].line);
+    }
+
+    #[test]
+    fn smallest_d_rho_wins_and_far_lines_do_not_match() {
+        let mut map = LineMap::new(MapConfig::paper()).unwrap();
+        for x in [3.0, 3.6] {
+            let (l, m) = wall(x, 0.0, 1.0);
+            map.insert(&l, &m);
+        }
+        let (q, _) = wall(3.5, 0.0, 1.0);
+        assert_eq!(map.find_match(&q).unwrap().id, LineId(1));
+        let (far, _) = wall(10.0, 0.0, 1.0);
+        assert!(map.find_match(&far).is_none());
+        // A perpendicular line nearby does not match (d_alpha above 15°).
+        let perp = LineSegment::through(
+            Point2::new(3.0, 0.5),
+            Vector2::new(1.0, 0.0),
+            Point2::new(2.5, 0.5),
+            Point2::new(3.5, 0.5),
+        );
+        assert!(map.find_match(&perp).is_none());
+    }
+
+    #[test]
+    fn long_wall_fragments_with_centroid_term_not_with_segment_gap() {
+        for (term, expect) in [(CentroidTerm::Centroid, 2), (CentroidTerm::SegmentGap, 1)] {
+            let config = MapConfig { centroid_term: term, ..MapConfig::paper() };
+            let mut map = LineMap::new(config).unwrap();
+            let (a, ma) = wall(3.0, 0.0, 10.0);
+            map.insert(&a, &ma);
+            let (b, mb) = wall(3.0, 9.0, 10.0);
+            map.insert(&b, &mb);
+            assert_eq!(map.len(), expect, "{term:?}");
+        }
+    }
+
+    #[test]
+    fn non_finite_lines_are_ignored() {
+        let mut map = LineMap::new(MapConfig::paper()).unwrap();
+        let (mut a, ma) = wall(3.0, 0.0, 1.0);
+        a.alpha = f64::NAN;
+        assert!(map.insert(&a, &ma).is_none());
+        assert!(map.find_match(&a).is_none());
+        assert!(map.is_empty());
+    }
+}

@@ -1,0 +1,142 @@
+//! Plain records of a map for saving and loading with serde (feature `serde`).
+
+use crate::{Extremes, LineId, LineMap, MapConfig, MapLine};
+use pcaline_fitting::Moments;
+use pcaline_geometry::{ConfigError, LineSegment, Matrix2, Point2, Vector2};
+
+/// One saved map line.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MapLineRecord {
+    /// Identifier.
+    pub id: u64,
+    /// Normal angle, radians.
+    pub alpha: f64,
+    /// Distance from the origin, metres.
+    pub d: f64,
+    /// First endpoint `[x, y]`.
+    pub start: [f64; 2],
+    /// Last endpoint `[x, y]`.
+    pub end: [f64; 2],
+    /// Points absorbed.
+    pub n_points: usize,
+    /// Residual standard deviation, metres.
+    pub residual_std_m: f64,
+    /// Covariance of (alpha, d), row-major.
+    pub covariance: [f64; 4],
+    /// Centroid of the absorbed points.
+    pub centroid: [f64; 2],
+    /// Centred second moments `[sxx, sxy, syy]`.
+    pub scatter: [f64; 3],
+    /// Detections merged.
+    pub observations: u32,
+}
+
+/// A saved map.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MapRecord {
+    /// The map's configuration.
+    pub config: MapConfig,
+    /// Its lines.
+    pub lines: Vec<MapLineRecord>,
+}
+
+impl MapRecord {
+    /// The record of a map.
+    pub fn from_map(map: &LineMap) -> Self {
+        let lines = map
+            .lines()
+            .iter()
+            .map(|m| {
+                let l = &m.line;
+                MapLineRecord {
+                    id: m.id.0,
+                    alpha: l.alpha,
+                    d: l.d,
+                    start: [l.start.x, l.start.y],
+                    end: [l.end.x, l.end.y],
+                    n_points: l.n_points,
+                    residual_std_m: l.residual_std,
+                    covariance: [
+                        l.covariance[(0, 0)],
+                        l.covariance[(0, 1)],
+                        l.covariance[(1, 0)],
+                        l.covariance[(1, 1)],
+                    ],
+                    centroid: [m.moments.mean.x, m.moments.mean.y],
+                    scatter: [m.moments.sxx, m.moments.sxy, m.moments.syy],
+                    observations: m.observations,
+                }
+            })
+            .collect();
+        MapRecord { config: *map.config(), lines }
+    }
+
+    /// The map of a record (its configuration is validated).
+    pub fn to_map(&self) -> Result<LineMap, ConfigError> {
+        let lines = self
+            .lines
+            .iter()
+            .map(|r| {
+                let start = Point2::new(r.start[0], r.start[1]);
+                let end = Point2::new(r.end[0], r.end[1]);
+                let mut line = LineSegment::through(
+                    Point2::new(r.centroid[0], r.centroid[1]),
+                    Vector2::new(-r.alpha.sin(), r.alpha.cos()),
+                    start,
+                    end,
+                );
+                line.alpha = r.alpha;
+                line.d = r.d;
+                line.start = start;
+                line.end = end;
+                line.n_points = r.n_points;
+                line.residual_std = r.residual_std_m;
+                line.covariance = Matrix2::new(
+                    r.covariance[0],
+                    r.covariance[1],
+                    r.covariance[2],
+                    r.covariance[3],
+                );
+                let moments = Moments {
+                    n: r.n_points,
+                    mean: Point2::new(r.centroid[0], r.centroid[1]),
+                    sxx: r.scatter[0],
+                    sxy: r.scatter[1],
+                    syy: r.scatter[2],
+                };
+                let extremes = Extremes {
+                    low: start,
+                    high: end,
+                    pending_low: [None; 2],
+                    pending_high: [None; 2],
+                };
+                MapLine { id: LineId(r.id), line, moments, observations: r.observations, extremes }
+            })
+            .collect();
+        LineMap::from_lines(self.config, lines)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pcaline_fitting::line_from_moments;
+
+    #[test]
+    fn round_trip_through_json() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        for x in [1.0, 4.0] {
+            let pts: Vec<_> = (0..10).map(|i| Point2::new(x, i as f64 * 0.1)).collect();
+            let m = Moments::from_points(&pts);
+            map.insert(&line_from_moments(&m, &pts[0], &pts[9]).unwrap(), &m);
+        }
+        let json = serde_json::to_string(&MapRecord::from_map(&map)).unwrap();
+        let back: MapRecord = serde_json::from_str(&json).unwrap();
+        let map2 = back.to_map().unwrap();
+        assert_eq!(map2.lines(), map.lines());
+        let pts: Vec<_> = (0..10).map(|i| Point2::new(4.01, 0.5 + i as f64 * 0.1)).collect();
+        let m = Moments::from_points(&pts);
+        let q = line_from_moments(&m, &pts[0], &pts[9]).unwrap();
+        assert_eq!(map2.find_match(&q).map(|m| m.id), Some(LineId(1)));
+    }
+}

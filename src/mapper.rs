@@ -1,0 +1,116 @@
+//! [`Mapper`]: the whole loop of the paper's section 2.1: scan and source pose
+//! in, corrected pose and updated line map out.
+
+use crate::{Config, LineDetector};
+use pcaline_aiding::{Aiding, AidingConfig, SensorLine, StepReport};
+use pcaline_geometry::{ConfigError, Pose2, Scan};
+use pcaline_mapping::{LineMap, MapConfig};
+
+/// Configuration of a [`Mapper`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapperConfig {
+    /// The line detector.
+    pub detector: Config,
+    /// The line map.
+    pub map: MapConfig,
+    /// The aiding.
+    pub aiding: AidingConfig,
+}
+
+impl MapperConfig {
+    /// The paper throughout: its detector, its map (eq. 8-10, endpoints
+    /// extended only) and its heading aiding (eq. 11-14).
+    pub fn paper() -> Self {
+        MapperConfig {
+            detector: Config::paper(),
+            map: MapConfig::paper(),
+            aiding: AidingConfig::paper(),
+        }
+    }
+}
+
+impl Default for MapperConfig {
+    /// The default detector, a refining map, and full-pose aiding.
+    fn default() -> Self {
+        MapperConfig {
+            detector: Config::default(),
+            map: MapConfig::default(),
+            aiding: AidingConfig::full_pose(),
+        }
+    }
+}
+
+/// What one scan did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapperStep {
+    /// The corrected `world_from_sensor`.
+    pub pose: Pose2,
+    /// Lines detected in the scan.
+    pub lines: usize,
+    /// The aiding's report.
+    pub report: StepReport,
+}
+
+/// Detection, mapping and aiding, scan by scan.
+///
+/// ```
+/// use pcaline::{Mapper, MapperConfig, Pose2, Scan};
+///
+/// let mut mapper = Mapper::new(MapperConfig::default()).unwrap();
+/// let angle_min = -30f32.to_radians();
+/// let inc = 0.25f32.to_radians();
+/// let ranges: Vec<f32> = (0..241).map(|i| 2.0 / (angle_min + i as f32 * inc).cos()).collect();
+/// let scan = Scan::new(angle_min, inc, 0.1, 30.0, ranges);
+/// let step = mapper.process(&scan, &Pose2::identity());
+/// assert_eq!(step.lines, 1);
+/// assert_eq!(mapper.map().len(), 1);
+/// ```
+#[derive(Debug, Clone)]
+pub struct Mapper {
+    detector: LineDetector,
+    aiding: Aiding,
+    lines: Vec<SensorLine>,
+}
+
+impl Mapper {
+    /// A mapper with an empty map.
+    pub fn new(config: MapperConfig) -> Result<Self, ConfigError> {
+        Ok(Mapper {
+            detector: LineDetector::new(config.detector)?,
+            aiding: Aiding::new(config.aiding, config.map)?,
+            lines: Vec::new(),
+        })
+    }
+
+    /// Processes one scan with the localization source's pose estimate for it.
+    pub fn process(&mut self, scan: &Scan, source_pose: &Pose2) -> MapperStep {
+        self.detect(scan);
+        let (pose, report) = self.aiding.step(source_pose, &self.lines);
+        MapperStep { pose, lines: self.lines.len(), report }
+    }
+
+    /// Processes one scan with the source's motion since the previous scan.
+    pub fn process_increment(&mut self, scan: &Scan, increment: &Pose2) -> MapperStep {
+        self.detect(scan);
+        let (pose, report) = self.aiding.step_increment(increment, &self.lines);
+        MapperStep { pose, lines: self.lines.len(), report }
+    }
+
+    fn detect(&mut self, scan: &Scan) {
+        self.lines.clear();
+        let detection = self.detector.detect(scan);
+        self.lines.extend(
+            detection.lines.iter().map(|l| SensorLine { line: l.line, moments: l.moments }),
+        );
+    }
+
+    /// The map built so far.
+    pub fn map(&self) -> &LineMap {
+        self.aiding.map()
+    }
+
+    /// The latest corrected pose.
+    pub fn pose(&self) -> Option<Pose2> {
+        self.aiding.pose()
+    }
+}
