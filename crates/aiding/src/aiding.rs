@@ -35,6 +35,13 @@ impl Aiding {
         Ok(Aiding { config, map: LineMap::new(map)?, corrected: None, last_source: None })
     }
 
+    /// A loop that continues from an existing map (for example one loaded
+    /// from a file); the first pose is taken from the source as it is.
+    pub fn with_map(config: AidingConfig, map: LineMap) -> Result<Self, ConfigError> {
+        config.validate()?;
+        Ok(Aiding { config, map, corrected: None, last_source: None })
+    }
+
     /// The map built so far.
     pub fn map(&self) -> &LineMap {
         &self.map

@@ -1,0 +1,87 @@
+//! Map update and aiding per scan, against maps of 100, 10,000 and 100,000
+//! lines. The maze's own lines are in the map; the rest are filler lines at
+//! the maze's density over a growing area, so the bench shows whether the
+//! spatial index keeps the cost independent of the map's size.
+
+use criterion::{BatchSize, BenchmarkId, Criterion, criterion_group, criterion_main};
+use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
+use pcaline::fitting::{Moments, line_from_moments};
+use pcaline::mapping::{LineMap, MapConfig};
+use pcaline::{Config, LineDetector, Point2, Pose2};
+use pcaline_sim::Simulator;
+use std::hint::black_box;
+
+fn maze_lines() -> (Vec<(Pose2, Vec<SensorLine>)>, LineMap) {
+    let text = include_str!("../sim-scenes/paper-maze.toml");
+    let scene = pcaline_io::parse_scene(std::path::Path::new("paper-maze.toml"), text).unwrap();
+    let sim = Simulator::new(&scene, 1).unwrap();
+    let mut detector = LineDetector::new(Config::default()).unwrap();
+    let mut map = LineMap::new(MapConfig::default()).unwrap();
+    let mut scans = Vec::new();
+    for frame in sim.frames().take(200) {
+        let lines: Vec<SensorLine> = detector
+            .detect(&frame.scan)
+            .lines
+            .iter()
+            .map(|l| SensorLine { line: l.line, moments: l.moments })
+            .collect();
+        for l in &lines {
+            map.insert(
+                &l.line.transformed(&frame.true_pose),
+                &l.moments.transformed(&frame.true_pose),
+            );
+        }
+        scans.push((frame.true_pose, lines));
+    }
+    (scans, map)
+}
+
+/// `map` plus filler lines up to `total`, 1 m long, one per 4 m² (about the
+/// maze's density), east of the maze.
+fn with_filler(map: &LineMap, total: usize) -> LineMap {
+    let mut map = map.clone();
+    let side = ((total as f64) * 4.0).sqrt();
+    let mut k = 0u64;
+    while map.len() < total {
+        // A deterministic low-discrepancy placement.
+        k += 1;
+        let u = (k as f64 * 0.618_033_988_75).fract();
+        let v = (k as f64 * 0.754_877_666_25).fract();
+        let (x, y) = (20.0 + u * side, v * side);
+        let a = (k as f64 * 0.381_966).fract() * std::f64::consts::PI;
+        let pts: Vec<_> = (0..10)
+            .map(|i| Point2::new(x + a.cos() * i as f64 * 0.1, y + a.sin() * i as f64 * 0.1))
+            .collect();
+        let m = Moments::from_points(&pts);
+        let line = line_from_moments(&m, &pts[0], &pts[9]).unwrap();
+        if map.find_match(&line).is_none() {
+            map.insert(&line, &m);
+        }
+    }
+    map
+}
+
+fn mapping(c: &mut Criterion) {
+    let (scans, base) = maze_lines();
+    let (pose, lines) = scans[150].clone();
+    let mut group = c.benchmark_group("map_update_and_aiding_per_scan");
+    for total in [100, 10_000, 100_000] {
+        let map = with_filler(&base, total);
+        for (name, config) in
+            [("heading", AidingConfig::heading()), ("full_pose", AidingConfig::full_pose())]
+        {
+            let aiding = Aiding::with_map(config, map.clone()).unwrap();
+            group.bench_with_input(BenchmarkId::new(name, total), &aiding, |b, aiding| {
+                b.iter_batched_ref(
+                    || aiding.clone(),
+                    |a| black_box(a.step(&pose, &lines)),
+                    BatchSize::LargeInput,
+                )
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, mapping);
+criterion_main!(benches);
