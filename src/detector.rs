@@ -177,7 +177,10 @@ impl LineDetector {
                 continue;
             }
             let moments = Moments::from_points(&self.points.xy[sub.clone()]);
-            if is_elongated(&moments.eigen(), fit.eth) {
+            let eigen = moments.eigen();
+            if is_elongated(&eigen, fit.eth)
+                && fit.residual_test.is_none_or(|t| t.accepts(&moments, &eigen))
+            {
                 self.pieces.push(Piece {
                     moments,
                     first: sub.start,

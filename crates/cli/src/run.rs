@@ -1,12 +1,19 @@
-//! `pcaline run`: the main job on a simulated scene: simulate every scan,
-//! detect lines, and report and draw what was found.
+//! `pcaline run`: the main job on a simulated scene. Every scan is simulated
+//! and its lines detected once; three mapping loops then run side by side:
+//! without aiding, with heading aiding (the paper's section 2.1) and with
+//! full-pose aiding. The summary compares their errors against the truth;
+//! pictures and JSON go to the output folder.
 
 use crate::exit::BadInput;
 use crate::progress;
 use crate::scene_cmd::draw_scene;
+use crate::svg::Plot;
 use anyhow::{Context, Result};
-use pcaline::{Config, LineDetector, LineSegment, Pose2};
+use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
+use pcaline::{LineDetector, LineSegment, MapperConfig, Pose2};
+use pcaline_eval::{MapQuality, TrajectoryErrors, VisibleWalls, map_quality, trajectory_errors};
 use pcaline_io::{parse_scene, read_scene, write_atomic};
+use pcaline_mapping::MapRecord;
 use pcaline_sim::{Scene, Simulator};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -24,7 +31,7 @@ pub struct RunArgs {
     /// Random seed of the simulation.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Detector preset.
+    /// Preset of detector, map and aiding.
     #[arg(long, value_enum, default_value_t = Preset::Default)]
     config: Preset,
     /// Output folder for pictures and JSON.
@@ -35,23 +42,45 @@ pub struct RunArgs {
     json: bool,
 }
 
-/// Detector presets.
+/// Presets.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum Preset {
-    /// `Config::default()`: noise-aware.
+    /// Noise-aware detector, refining map; heading aiding with inverse-variance weights.
     Default,
-    /// `Config::paper()`: exactly the paper's values.
+    /// The paper throughout: detector, map (eq. 8-10) and aiding (eq. 11-14).
     Paper,
 }
 
 impl Preset {
-    /// The configuration of the preset.
-    pub fn config(self) -> Config {
+    fn mapper(self) -> MapperConfig {
         match self {
-            Preset::Default => Config::default(),
-            Preset::Paper => Config::paper(),
+            Preset::Default => MapperConfig::default(),
+            Preset::Paper => MapperConfig::paper(),
         }
     }
+
+    fn heading_aiding(self) -> AidingConfig {
+        match self {
+            Preset::Default => AidingConfig::heading(),
+            Preset::Paper => AidingConfig::paper(),
+        }
+    }
+}
+
+/// The three loops compared.
+const MODES: [&str; 3] = ["unaided", "heading", "full-pose"];
+
+#[derive(Debug, Serialize)]
+struct ModeSummary {
+    mode: &'static str,
+    heading_rms_deg: f64,
+    heading_max_deg: f64,
+    position_rms_m: f64,
+    position_final_m: f64,
+    map_lines: usize,
+    map_worst_line_m: f64,
+    map_lines_off_wall: usize,
+    map_covered_fraction: f64,
 }
 
 #[derive(Debug, Serialize)]
@@ -62,25 +91,26 @@ struct Summary {
     scans: usize,
     duration_s: f64,
     lines_per_scan_mean: f64,
-    lines_per_scan_min: usize,
-    lines_per_scan_max: usize,
     median_residual_std_m: f64,
     detection_time_per_scan_us: f64,
+    modes: Vec<ModeSummary>,
     outputs: Vec<String>,
 }
 
 #[derive(Debug, Serialize)]
-struct ScanLines {
+struct ScanRecord {
     index: usize,
     time_s: f64,
     true_pose: [f64; 3],
     odometry_pose: [f64; 3],
-    /// Lines in the sensor frame: alpha (rad), d (m), start, end, points, residual std (m).
-    lines: Vec<LineOut>,
+    heading_aided_pose: [f64; 3],
+    full_pose_aided_pose: [f64; 3],
+    /// Lines in the sensor frame.
+    lines: Vec<LineRecord>,
 }
 
 #[derive(Debug, Serialize)]
-struct LineOut {
+struct LineRecord {
     alpha: f64,
     d: f64,
     start: [f64; 2],
@@ -93,8 +123,8 @@ fn pose_array(p: &Pose2) -> [f64; 3] {
     [p.x, p.y, p.heading]
 }
 
-fn line_out(l: &LineSegment) -> LineOut {
-    LineOut {
+fn line_record(l: &LineSegment) -> LineRecord {
+    LineRecord {
         alpha: l.alpha,
         d: l.d,
         start: [l.start.x, l.start.y],
@@ -121,65 +151,102 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let (scene, scene_name) = load(&args.scene)?;
     let sim =
         Simulator::new(&scene, args.seed).map_err(|e| BadInput(format!("{scene_name}: {e}")))?;
-    let mut detector = LineDetector::new(args.preset_config())?;
+    let config = args.config.mapper();
+    let mut detector = LineDetector::new(config.detector)?;
+    let aiding_configs =
+        [AidingConfig::none(), args.config.heading_aiding(), AidingConfig::full_pose()];
+    let mut loops = aiding_configs
+        .iter()
+        .map(|a| Aiding::new(*a, config.map))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut visible = VisibleWalls::new(sim.world().walls(), 0.05);
 
     let bar = progress::bar(sim.len() as u64, "scans", quiet);
-    let mut per_scan = Vec::with_capacity(sim.len());
+    let mut records = Vec::with_capacity(sim.len());
+    let mut estimates: [Vec<Pose2>; 3] = Default::default();
     let mut residuals = Vec::new();
+    let mut line_count = 0usize;
     let mut detect_time = 0.0;
     let mut drawn: Vec<LineSegment> = Vec::new();
+    let mut sensor_lines: Vec<SensorLine> = Vec::new();
     for frame in sim.frames() {
         let t0 = Instant::now();
         let detection = detector.detect(&frame.scan);
         detect_time += t0.elapsed().as_secs_f64();
-        let lines: Vec<LineSegment> = detection.lines.iter().map(|l| l.line).collect();
-        residuals.extend(lines.iter().map(|l| l.residual_std));
+        sensor_lines.clear();
+        sensor_lines.extend(
+            detection.lines.iter().map(|l| SensorLine { line: l.line, moments: l.moments }),
+        );
+        line_count += sensor_lines.len();
+        residuals.extend(sensor_lines.iter().map(|l| l.line.residual_std));
         if frame.index % 20 == 0 {
-            drawn.extend(lines.iter().map(|l| l.transformed(&frame.true_pose)));
+            drawn.extend(sensor_lines.iter().map(|l| l.line.transformed(&frame.true_pose)));
         }
-        per_scan.push(ScanLines {
+        for (aiding, est) in loops.iter_mut().zip(estimates.iter_mut()) {
+            let (pose, _) = aiding.step(&frame.odometry_pose, &sensor_lines);
+            est.push(pose);
+        }
+        visible.observe(&frame);
+        records.push(ScanRecord {
             index: frame.index,
             time_s: frame.time_s,
             true_pose: pose_array(&frame.true_pose),
             odometry_pose: pose_array(&frame.odometry_pose),
-            lines: lines.iter().map(line_out).collect(),
+            heading_aided_pose: pose_array(&estimates[1][frame.index]),
+            full_pose_aided_pose: pose_array(&estimates[2][frame.index]),
+            lines: sensor_lines.iter().map(|l| line_record(&l.line)).collect(),
         });
         bar.inc(1);
     }
     bar.finish_and_clear();
 
+    let mut modes = Vec::new();
+    for ((mode, aiding), est) in MODES.iter().zip(&loops).zip(&estimates) {
+        let e: TrajectoryErrors =
+            trajectory_errors(est, sim.true_poses()).context("the scene has no scans")?;
+        let q: MapQuality = map_quality(aiding.map().lines(), &visible, 0.05, 2f64.to_radians());
+        modes.push(ModeSummary {
+            mode,
+            heading_rms_deg: e.heading_rms_rad.to_degrees(),
+            heading_max_deg: e.heading_max_rad.to_degrees(),
+            position_rms_m: e.position_rms_m,
+            position_final_m: e.position_final_m,
+            map_lines: q.lines,
+            map_worst_line_m: q.line_errors_m.iter().copied().fold(0.0, f64::max),
+            map_lines_off_wall: q.spurious,
+            map_covered_fraction: q.covered_fraction,
+        });
+    }
+
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating output folder {}", args.out.display()))?;
-    let lines_path = args.out.join("lines.json");
-    let json = serde_json::to_vec(&per_scan)?;
-    write_atomic(&lines_path, &json)?;
+    let mut outputs = Vec::new();
+    let mut write = |name: &str, bytes: &[u8]| -> Result<()> {
+        let path = args.out.join(name);
+        write_atomic(&path, bytes)?;
+        outputs.push(path.display().to_string());
+        Ok(())
+    };
+    write("scans.json", &serde_json::to_vec(&records)?)?;
+    write("map.json", &serde_json::to_vec_pretty(&MapRecord::from_map(loops[2].map()))?)?;
+    write("detections.svg", draw_detections(&scene, &sim, &drawn).as_bytes())?;
+    write("map.svg", draw_map(&scene, &sim, &loops[2], &estimates).as_bytes())?;
+    write("heading.svg", draw_heading(&sim, &estimates).as_bytes())?;
+    write("heading-error.svg", draw_heading_error(&sim, &estimates).as_bytes())?;
 
-    let mut plot = draw_scene(&scene, None);
-    for l in &drawn {
-        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
-    }
-    let truth: Vec<[f64; 2]> = sim.true_poses().iter().map(|p| [p.x, p.y]).collect();
-    plot.polyline(&truth, "#2ca02c", 1.0, false);
-    plot.legend("detected lines (every 20th scan)", "#d62728", false);
-    plot.legend("true trajectory", "#2ca02c", false);
-    let svg_path = args.out.join("detections.svg");
-    let title = format!("{}: lines detected along the trajectory", scene.name);
-    write_atomic(&svg_path, plot.finish(&title).as_bytes())?;
-
-    let counts: Vec<usize> = per_scan.iter().map(|s| s.lines.len()).collect();
     residuals.sort_by(f64::total_cmp);
+    let scans = sim.len();
     let summary = Summary {
         scene: scene_name,
         seed: args.seed,
         preset: format!("{:?}", args.config).to_lowercase(),
-        scans: counts.len(),
-        duration_s: sim.len() as f64 / sim.sensor().rate_hz,
-        lines_per_scan_mean: counts.iter().sum::<usize>() as f64 / counts.len().max(1) as f64,
-        lines_per_scan_min: counts.iter().copied().min().unwrap_or(0),
-        lines_per_scan_max: counts.iter().copied().max().unwrap_or(0),
+        scans,
+        duration_s: scans as f64 / sim.sensor().rate_hz,
+        lines_per_scan_mean: line_count as f64 / scans.max(1) as f64,
         median_residual_std_m: residuals.get(residuals.len() / 2).copied().unwrap_or(f64::NAN),
-        detection_time_per_scan_us: 1e6 * detect_time / counts.len().max(1) as f64,
-        outputs: vec![lines_path.display().to_string(), svg_path.display().to_string()],
+        detection_time_per_scan_us: 1e6 * detect_time / scans.max(1) as f64,
+        modes,
+        outputs,
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&summary)?);
@@ -189,23 +256,154 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-impl RunArgs {
-    fn preset_config(&self) -> Config {
-        self.config.config()
+fn draw_detections(scene: &Scene, sim: &Simulator, drawn: &[LineSegment]) -> String {
+    let mut plot = draw_scene(scene, None);
+    for l in drawn {
+        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
     }
+    let truth: Vec<[f64; 2]> = sim.true_poses().iter().map(|p| [p.x, p.y]).collect();
+    plot.polyline(&truth, "#2ca02c", 1.0, false);
+    plot.legend("detected lines, every 20th scan", "#d62728", false);
+    plot.legend("true trajectory", "#2ca02c", false);
+    plot.finish(&format!("{}: lines detected along the trajectory", scene.name))
+}
+
+/// The paper's Figure 10: the line map over the true walls, with trajectories.
+fn draw_map(scene: &Scene, sim: &Simulator, full: &Aiding, est: &[Vec<Pose2>; 3]) -> String {
+    let (lo, hi) = scene.bounds();
+    let mut plot = Plot::new([lo.x, lo.y], [hi.x, hi.y], 1000.0);
+    for w in sim.world().walls() {
+        plot.line([w.a.x, w.a.y], [w.b.x, w.b.y], "#bbbbbb", 5.0);
+    }
+    for m in full.map().lines() {
+        let l = &m.line;
+        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
+    }
+    let path = |poses: &[Pose2]| poses.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
+    plot.polyline(&path(sim.odometry_poses()), "#1f77b4", 1.5, true);
+    plot.polyline(&path(&est[1]), "#ff7f0e", 1.5, false);
+    plot.polyline(&path(sim.true_poses()), "#2ca02c", 3.0, false);
+    plot.polyline(&path(&est[2]), "#9467bd", 1.5, false);
+    plot.legend("true walls", "#bbbbbb", false);
+    plot.legend("line map (full-pose aiding)", "#d62728", false);
+    plot.legend("odometry (unaided)", "#1f77b4", false);
+    plot.legend("heading-aided", "#ff7f0e", false);
+    plot.legend("true trajectory", "#2ca02c", false);
+    plot.legend("full-pose aided", "#9467bd", false);
+    plot.finish(&format!("{}: line map and trajectories", scene.name))
+}
+
+/// The paper's Figure 11: heading over time with and without aiding.
+fn draw_heading(sim: &Simulator, est: &[Vec<Pose2>; 3]) -> String {
+    let dt = 1.0 / sim.sensor().rate_hz;
+    // Unwrapped headings in degrees, so turns do not jump at ±180°.
+    let series = |poses: &[Pose2]| {
+        let mut out = Vec::with_capacity(poses.len());
+        let mut acc = 0.0;
+        let mut prev: Option<f64> = None;
+        for (k, p) in poses.iter().enumerate() {
+            acc += prev.map_or(p.heading, |q| pcaline::geometry::wrap_angle(p.heading - q));
+            prev = Some(p.heading);
+            out.push([k as f64 * dt, acc.to_degrees()]);
+        }
+        out
+    };
+    let all =
+        [series(sim.true_poses()), series(sim.odometry_poses()), series(&est[1]), series(&est[2])];
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in all.iter().flatten() {
+        lo = lo.min(p[1]);
+        hi = hi.max(p[1]);
+    }
+    let t_end = sim.len() as f64 * dt;
+    let mut plot = Plot::chart([0.0, lo], [t_end, hi], 1000.0, 420.0, ["time (s)", "heading (°)"]);
+    let styles = [
+        ("true", "#2ca02c", 3.0),
+        ("odometry (unaided)", "#1f77b4", 1.5),
+        ("heading-aided", "#ff7f0e", 1.5),
+        ("full-pose aided", "#9467bd", 1.5),
+    ];
+    for (s, (name, color, width)) in all.iter().zip(styles) {
+        plot.polyline(s, color, width, name.starts_with("odometry"));
+        plot.legend(name, color, false);
+    }
+    plot.finish("Heading over time, with and without aiding")
+}
+
+/// Heading error over time, with and without aiding.
+fn draw_heading_error(sim: &Simulator, est: &[Vec<Pose2>; 3]) -> String {
+    let dt = 1.0 / sim.sensor().rate_hz;
+    let truth = sim.true_poses();
+    let error = |poses: &[Pose2]| -> Vec<[f64; 2]> {
+        poses
+            .iter()
+            .zip(truth)
+            .enumerate()
+            .map(|(k, (p, t))| {
+                [k as f64 * dt, pcaline::geometry::wrap_angle(p.heading - t.heading).to_degrees()]
+            })
+            .collect()
+    };
+    let all = [error(sim.odometry_poses()), error(&est[1]), error(&est[2])];
+    let (mut lo, mut hi) = (-0.5f64, 0.5f64);
+    for p in all.iter().flatten() {
+        lo = lo.min(p[1]);
+        hi = hi.max(p[1]);
+    }
+    let t_end = sim.len() as f64 * dt;
+    let mut plot =
+        Plot::chart([0.0, lo], [t_end, hi], 1000.0, 420.0, ["time (s)", "heading error (°)"]);
+    let styles = [
+        ("odometry (unaided)", "#1f77b4"),
+        ("heading-aided", "#ff7f0e"),
+        ("full-pose aided", "#9467bd"),
+    ];
+    for (s, (name, color)) in all.iter().zip(styles) {
+        plot.polyline(s, color, 1.5, false);
+        plot.legend(name, color, false);
+    }
+    plot.finish("Heading error against the truth")
 }
 
 fn print_summary(s: &Summary) {
-    println!("scene                 {}", s.scene);
-    println!("seed / preset         {} / {}", s.seed, s.preset);
-    println!("scans                 {} ({:.1} s)", s.scans, s.duration_s);
+    println!("scene                {}", s.scene);
+    println!("seed / preset        {} / {}", s.seed, s.preset);
+    println!("scans                {} ({:.1} s)", s.scans, s.duration_s);
     println!(
-        "lines per scan        mean {:.1}, min {}, max {}",
-        s.lines_per_scan_mean, s.lines_per_scan_min, s.lines_per_scan_max
+        "lines per scan       {:.1} (median residual std {:.1} mm)",
+        s.lines_per_scan_mean,
+        1e3 * s.median_residual_std_m
     );
-    println!("median residual std   {:.1} mm", 1e3 * s.median_residual_std_m);
-    println!("detection time        {:.1} us per scan", s.detection_time_per_scan_us);
+    println!("detection time       {:.1} us per scan", s.detection_time_per_scan_us);
+    println!();
+    println!(
+        "{:<10} {:>12} {:>12} {:>12} {:>12} {:>9} {:>11} {:>9} {:>9}",
+        "aiding",
+        "heading rms",
+        "heading max",
+        "pos rms",
+        "pos final",
+        "map lines",
+        "worst line",
+        "off wall",
+        "covered"
+    );
+    for m in &s.modes {
+        println!(
+            "{:<10} {:>10.3} ° {:>10.3} ° {:>10.3} m {:>10.3} m {:>9} {:>8.1} cm {:>9} {:>8.1}%",
+            m.mode,
+            m.heading_rms_deg,
+            m.heading_max_deg,
+            m.position_rms_m,
+            m.position_final_m,
+            m.map_lines,
+            100.0 * m.map_worst_line_m,
+            m.map_lines_off_wall,
+            100.0 * m.map_covered_fraction
+        );
+    }
+    println!();
     for o in &s.outputs {
-        println!("wrote                 {o}");
+        println!("wrote                {o}");
     }
 }

@@ -3,17 +3,22 @@
 
 use std::fmt::Write;
 
-/// An SVG plot of a rectangle of the world, y up.
+/// An SVG plot of a rectangle of data coordinates, y up, with the legend to
+/// the right of the frame.
 pub struct Plot {
     min: [f64; 2],
     max: [f64; 2],
-    scale: f64,
+    scale: [f64; 2],
     margin: f64,
     width: f64,
     height: f64,
+    labels: [String; 2],
     body: String,
     legend: Vec<(String, String, bool)>,
 }
+
+/// Width of the legend column, pixels.
+const LEGEND_W: f64 = 250.0;
 
 impl Plot {
     /// A plot of the box `min`..`max` (metres) about `width_px` wide.
@@ -33,19 +38,41 @@ impl Plot {
         Plot {
             min,
             max,
-            scale,
+            scale: [scale, scale],
             margin,
-            width: width_px,
+            width: width_px + LEGEND_W,
             height,
+            labels: ["x (m)".into(), "y (m)".into()],
             body: String::new(),
             legend: Vec::new(),
         }
     }
 
+    /// A chart with independent axis scales (a time series), plot area
+    /// `width_px` x `height_px`.
+    pub fn chart(
+        min: [f64; 2],
+        max: [f64; 2],
+        width_px: f64,
+        height_px: f64,
+        labels: [&str; 2],
+    ) -> Self {
+        let mut plot = Plot::new(min, max, width_px);
+        let margin = plot.margin;
+        let (min, max) = (plot.min, plot.max);
+        plot.scale = [
+            (width_px - 2.0 * margin) / (max[0] - min[0]),
+            (height_px - 2.0 * margin) / (max[1] - min[1]),
+        ];
+        plot.height = height_px;
+        plot.labels = [labels[0].to_string(), labels[1].to_string()];
+        plot
+    }
+
     fn px(&self, p: [f64; 2]) -> (f64, f64) {
         (
-            self.margin + (p[0] - self.min[0]) * self.scale,
-            self.height - self.margin - (p[1] - self.min[1]) * self.scale,
+            self.margin + (p[0] - self.min[0]) * self.scale[0],
+            self.height - self.margin - (p[1] - self.min[1]) * self.scale[1],
         )
     }
 
@@ -108,9 +135,9 @@ impl Plot {
             w / 2.0,
             escape(title)
         );
-        // Axes with ticks at a round step.
-        let span = (self.max[0] - self.min[0]).max(self.max[1] - self.min[1]);
-        let step = nice_step(span / 8.0);
+        // Axes with ticks at a round step per axis.
+        let step_x = nice_step((self.max[0] - self.min[0]) / 8.0);
+        let step_y = nice_step((self.max[1] - self.min[1]) / 8.0);
         let (x0, y0) = self.px(self.min);
         let (x1, y1) = self.px(self.max);
         let _ = writeln!(
@@ -119,7 +146,7 @@ impl Plot {
             x1 - x0,
             y0 - y1
         );
-        let mut t = (self.min[0] / step).ceil() * step;
+        let mut t = (self.min[0] / step_x).ceil() * step_x;
         while t <= self.max[0] {
             let (x, _) = self.px([t, self.min[1]]);
             let _ = writeln!(
@@ -129,9 +156,9 @@ impl Plot {
                 y0 + 19.0,
                 fmt_tick(t)
             );
-            t += step;
+            t += step_x;
         }
-        let mut t = (self.min[1] / step).ceil() * step;
+        let mut t = (self.min[1] / step_y).ceil() * step_y;
         while t <= self.max[1] {
             let (_, y) = self.px([self.min[0], t]);
             let _ = writeln!(
@@ -142,33 +169,26 @@ impl Plot {
                 y + 4.0,
                 fmt_tick(t)
             );
-            t += step;
+            t += step_y;
         }
         let _ = writeln!(
             out,
-            r#"<text x="{:.1}" y="{:.1}" font-size="13" text-anchor="middle" font-family="sans-serif">x (m)</text>"#,
+            r#"<text x="{:.1}" y="{:.1}" font-size="13" text-anchor="middle" font-family="sans-serif">{}</text>"#,
             (x0 + x1) / 2.0,
-            h - 12.0
+            h - 12.0,
+            escape(&self.labels[0])
         );
         let _ = writeln!(
             out,
-            r#"<text x="16" y="{:.1}" font-size="13" text-anchor="middle" font-family="sans-serif" transform="rotate(-90 16 {:.1})">y (m)</text>"#,
+            r#"<text x="16" y="{:.1}" font-size="13" text-anchor="middle" font-family="sans-serif" transform="rotate(-90 16 {:.1})">{}</text>"#,
             (y0 + y1) / 2.0,
-            (y0 + y1) / 2.0
+            (y0 + y1) / 2.0,
+            escape(&self.labels[1])
         );
         out.push_str(&self.body);
-        // Legend, top right inside the frame.
-        let lx = x1 - 200.0;
+        // Legend, right of the frame.
+        let lx = x1 + 25.0;
         let mut ly = y1 + 18.0;
-        if !self.legend.is_empty() {
-            let _ = writeln!(
-                out,
-                r##"<rect x="{:.1}" y="{:.1}" width="195" height="{:.1}" fill="white" fill-opacity="0.85" stroke="#ccc"/>"##,
-                lx - 8.0,
-                y1 + 4.0,
-                self.legend.len() as f64 * 20.0 + 8.0
-            );
-        }
         for (text, color, dot) in &self.legend {
             if *dot {
                 let _ = writeln!(
@@ -228,6 +248,9 @@ mod tests {
 
     #[test]
     fn plot_is_well_formed() {
+        let mut p = Plot::chart([0.0, -1.0], [60.0, 1.0], 800.0, 300.0, ["t (s)", "heading (°)"]);
+        p.polyline(&[[0.0, 0.0], [60.0, 0.5]], "red", 1.0, false);
+        assert!(p.finish("c").contains("heading (°)"));
         let mut p = Plot::new([0.0, 0.0], [10.0, 5.0], 800.0);
         p.line([0.0, 0.0], [10.0, 5.0], "black", 2.0);
         p.legend("walls <true>", "black", false);

@@ -24,6 +24,7 @@ mod least_squares;
 mod merge;
 mod moments;
 mod pca;
+mod residual;
 
 pub use corners::refine_boundaries;
 pub use eigen::SymmetricEigen2;
@@ -32,6 +33,7 @@ pub use least_squares::{fit_least_squares, slope_intercept_from_moments, vertica
 pub use merge::{MergeRule, Piece, merge_adjacent};
 pub use moments::Moments;
 pub use pca::{fit_pca, line_from_eigen, line_from_moments};
+pub use residual::ResidualTest;
 
 use pcaline_geometry::{ConfigError, RangeNoise};
 
@@ -52,6 +54,9 @@ pub struct FitConfig {
     /// neighbouring piece when they fit its line better
     /// ([`refine_boundaries`]); 0 disables it (paper).
     pub corner_window: usize,
+    /// Reject pieces whose residual is inconsistent with the noise
+    /// ([`ResidualTest`]); `None` in the paper, whose only test is `ETh`.
+    pub residual_test: Option<ResidualTest>,
 }
 
 impl FitConfig {
@@ -63,6 +68,7 @@ impl FitConfig {
             min_points: 3,
             merge: MergeRule::Angles { alpha_t_rad: 0.05f64.to_radians() },
             corner_window: 0,
+            residual_test: None,
         }
     }
 
@@ -70,13 +76,15 @@ impl FitConfig {
     /// accepts two pieces when one line through both is consistent with the
     /// sensor noise (residual increase below the 99.9% point of `chi²(2)`)
     /// instead of a 0.05° angle, which noise alone exceeds on short pieces;
-    /// and corner points assigned to the line they fit (window of 3 points).
+    /// corner points assigned to the line they fit (window of 3 points); and
+    /// pieces whose residual exceeds 3 noise sigmas rejected.
     pub fn noise_aware(noise: RangeNoise) -> Self {
         FitConfig {
             eth: 50.0,
             min_points: 5,
             merge: MergeRule::ResidualIncrease { max_chi2: 13.8, noise },
             corner_window: 3,
+            residual_test: Some(ResidualTest { max_sigmas: 3.0, noise }),
         }
     }
 
@@ -106,7 +114,17 @@ impl FitConfig {
                 noise.validate("fitting.merge.noise")
             }
             MergeRule::Never => Ok(()),
+        }?;
+        if let Some(t) = self.residual_test {
+            ConfigError::check(
+                t.max_sigmas > 0.0 && t.max_sigmas.is_finite(),
+                "fitting.residual_test.max_sigmas",
+                t.max_sigmas,
+                "must be finite and > 0",
+            )?;
+            t.noise.validate("fitting.residual_test.noise")?;
         }
+        Ok(())
     }
 }
 

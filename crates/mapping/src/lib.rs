@@ -56,6 +56,12 @@ pub struct MapConfig {
     /// confirm it (the paper keeps the longest extent ever seen, so one
     /// glitch extends a wall for good).
     pub robust_extent: bool,
+    /// A detected line that matches nothing starts a new map line only when
+    /// its orientation is known to this standard deviation (radians, from its
+    /// covariance); `None` in the paper. A piece of a few centimetres at a
+    /// corner is straight but points anywhere; it may still be absorbed by a
+    /// map line it matches.
+    pub max_new_alpha_std_rad: Option<f64>,
     /// Cell size of the spatial index, metres.
     pub grid_cell_m: f64,
 }
@@ -70,6 +76,7 @@ impl MapConfig {
             max_offset_m: None,
             refine: false,
             robust_extent: false,
+            max_new_alpha_std_rad: None,
             grid_cell_m: 2.0,
         }
     }
@@ -88,6 +95,9 @@ impl MapConfig {
             self.max_d_rho_m,
             "must be finite and > 0",
         )?;
+        if let Some(a) = self.max_new_alpha_std_rad {
+            ConfigError::check(a > 0.0, "mapping.max_new_alpha_std", a, "must be > 0")?;
+        }
         if let Some(o) = self.max_offset_m {
             ConfigError::check(
                 o > 0.0 && o.is_finite(),
@@ -108,7 +118,8 @@ impl MapConfig {
 impl Default for MapConfig {
     /// Gates for an aided pose (5°, 0.15 m off the line, `d_rho` 1 m), the
     /// segment-gap centroid term (long walls stay one map line), refinement
-    /// from all absorbed points, and a robust extent.
+    /// from all absorbed points, a robust extent, and new map lines only from
+    /// lines whose orientation is known to 1°.
     fn default() -> Self {
         MapConfig {
             max_d_alpha_rad: 5f64.to_radians(),
@@ -117,6 +128,7 @@ impl Default for MapConfig {
             max_offset_m: Some(0.15),
             refine: true,
             robust_extent: true,
+            max_new_alpha_std_rad: Some(1f64.to_radians()),
             grid_cell_m: 2.0,
         }
     }

@@ -212,7 +212,8 @@ impl LineMap {
     /// Adds a detected line (world frame, with the moments of its points in
     /// the world frame): merged into the map line it matches, or added as a
     /// new map line. Returns the map line's id and the match, if any.
-    /// Non-finite lines are ignored (returns `None`).
+    /// Non-finite lines, and unmatched lines too uncertain to start a map line
+    /// (see [`MapConfig::max_new_alpha_std_rad`]), are not added (`None`).
     pub fn insert(
         &mut self,
         line: &LineSegment,
@@ -230,6 +231,12 @@ impl LineMap {
                 Some((m.id, Some(m)))
             }
             None => {
+                if self.config.max_new_alpha_std_rad.is_some_and(|max| {
+                    let std = line.covariance[(0, 0)].sqrt();
+                    std.is_nan() || std > max
+                }) {
+                    return None;
+                }
                 let id = LineId(self.next_id);
                 self.next_id += 1;
                 let index = self.lines.len() as u32;
@@ -381,6 +388,19 @@ mod tests {
             map.insert(&b, &mb);
             assert_eq!(map.len(), expect, "{term:?}");
         }
+    }
+
+    #[test]
+    fn uncertain_lines_do_not_start_map_lines() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        let (mut a, ma) = wall(3.0, 0.0, 1.0);
+        a.covariance[(0, 0)] = 2f64.to_radians().powi(2);
+        assert!(map.insert(&a, &ma).is_none());
+        a.covariance[(0, 0)] = 0.5f64.to_radians().powi(2);
+        assert!(map.insert(&a, &ma).is_some());
+        // Once the map line exists, an uncertain observation is absorbed.
+        a.covariance[(0, 0)] = 2f64.to_radians().powi(2);
+        assert!(map.insert(&a, &ma).is_some_and(|(_, m)| m.is_some()));
     }
 
     #[test]
