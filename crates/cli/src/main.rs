@@ -10,6 +10,7 @@
 
 mod exit;
 mod progress;
+mod reproduce;
 mod run;
 mod scene_cmd;
 mod svg;
@@ -32,7 +33,8 @@ const EXAMPLES: &str = "Examples:
   pcaline run                                   simulate the default maze, detect, summarise
   pcaline run sim-scenes/hall-pillars.toml --seed 3 --out out/hall
   pcaline scene check sim-scenes/*.toml
-  pcaline scene generate --seed 7 --cols 6 --rows 4 -o my-maze.toml";
+  pcaline scene generate --seed 7 --cols 6 --rows 4 -o my-maze.toml
+  pcaline reproduce all                         the paper's Tables 1-3 and ETh experiment";
 
 #[derive(Debug, Subcommand)]
 enum Command {
@@ -42,6 +44,9 @@ enum Command {
     /// Generate, check or draw scene files.
     #[command(subcommand)]
     Scene(scene_cmd::SceneCommand),
+    /// Reproduce the paper's Tables 1-3 and its ETh experiment, with the
+    /// paper's values beside ours.
+    Reproduce(reproduce::ReproduceArgs),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +54,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(&args, cli.quiet),
         Command::Scene(cmd) => scene_cmd::run(&cmd, cli.quiet),
+        Command::Reproduce(args) => reproduce::run(&args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

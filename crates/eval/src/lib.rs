@@ -1,7 +1,6 @@
 //! Accuracy metrics of pcaline against exact ground truth: localization
-//! errors of trajectories, and the quality of line maps against the true walls.
-//! (Detection metrics and the paper's tables follow the protocol of the
-//! design document, section 5.)
+//! errors of trajectories, the quality of line maps against the true walls,
+//! and the paper's own simulations (Tables 1-3 and the `ETh` experiment).
 //!
 //! ```
 //! use pcaline_eval::trajectory_errors;
@@ -14,7 +13,12 @@
 //! ```
 
 mod map_quality;
+mod reproduce;
 mod trajectory;
 
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
+pub use reproduce::{
+    ETH_EXPERIMENTS, EthExperiment, EthResult, FitRow, FitRowResult, TABLE1, TABLE2, TABLE3,
+    dataset, run_eth, run_fit_row,
+};
 pub use trajectory::{TrajectoryErrors, trajectory_errors};

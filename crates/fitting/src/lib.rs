@@ -32,7 +32,7 @@ pub use elongation::{elongation_ratio, is_elongated};
 pub use least_squares::{fit_least_squares, slope_intercept_from_moments, vertical_rms_error};
 pub use merge::{MergeRule, Piece, merge_adjacent};
 pub use moments::Moments;
-pub use pca::{fit_pca, line_from_eigen, line_from_moments};
+pub use pca::{fit_pca, fit_pca_slope_intercept, line_from_eigen, line_from_moments};
 pub use residual::ResidualTest;
 
 use pcaline_geometry::{ConfigError, RangeNoise};

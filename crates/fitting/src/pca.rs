@@ -3,7 +3,7 @@
 //! the first and last point and the (alpha, d) covariance.
 
 use crate::{Moments, SymmetricEigen2};
-use pcaline_geometry::{LineSegment, Matrix2, Point2, Vector2};
+use pcaline_geometry::{LineSegment, Matrix2, Point2, SlopeIntercept, Vector2};
 
 /// Fits a line to `points` by PCA (eq. 3, 5, 6), without the elongation test.
 ///
@@ -22,6 +22,41 @@ use pcaline_geometry::{LineSegment, Matrix2, Point2, Vector2};
 pub fn fit_pca(points: &[Point2<f64>]) -> Option<LineSegment> {
     let (first, last) = (points.first()?, points.last()?);
     line_from_moments(&Moments::from_points(points), first, last)
+}
+
+/// The paper's PCA fit as `y = m_L x + n_L` (eq. 3-6): the covariance `Q`,
+/// its major eigenvector `(lambda_x, lambda_y)`, `m_L = lambda_y / lambda_x`
+/// (eq. 5) and `n_L = y_C - m_L x_C` (eq. 6). This is what the paper times
+/// against least squares (Table 1); [`fit_pca`] builds a whole
+/// [`LineSegment`] (Hessian form, endpoints, covariance) instead.
+///
+/// `None` for fewer than 2 points, coincident points, or a vertical line
+/// (eq. 5 is undefined there).
+///
+/// ```
+/// use pcaline_fitting::fit_pca_slope_intercept;
+/// use pcaline_geometry::Point2;
+/// let pts = [Point2::new(0.0, 1.0), Point2::new(1.0, 3.0), Point2::new(2.0, 5.0)];
+/// let f = fit_pca_slope_intercept(&pts).unwrap();
+/// assert!((f.m - 2.0).abs() < 1e-12 && (f.n - 1.0).abs() < 1e-12);
+/// ```
+pub fn fit_pca_slope_intercept(points: &[Point2<f64>]) -> Option<SlopeIntercept> {
+    if points.len() < 2 {
+        return None;
+    }
+    let moments = Moments::from_points(points);
+    // The major eigenvector of the scatter (Q times N has the same
+    // eigenvectors), unnormalised: eq. 5 only needs its slope.
+    let (a, b, c) = (moments.sxx, moments.sxy, moments.syy);
+    let half_diff = 0.5 * (a - c);
+    let h = (half_diff * half_diff + b * b).sqrt();
+    let (vx, vy) = if half_diff >= 0.0 { (h + half_diff, b) } else { (b, h - half_diff) };
+    if h <= 0.0 && half_diff == 0.0 || vx.abs() <= 1e-12 * vy.abs() {
+        return None; // coincident points, or vertical
+    }
+    let m = vy / vx;
+    let fit = SlopeIntercept { m, n: moments.mean.y - m * moments.mean.x };
+    (fit.m.is_finite() && fit.n.is_finite()).then_some(fit)
 }
 
 /// The PCA line (eq. 5, 6) of a point set given its [`Moments`] and its first
@@ -96,6 +131,26 @@ mod tests {
         let l = fit_pca(&pts).unwrap();
         assert_eq!(l.d, 0.0);
         assert!((l.alpha.abs() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn slope_intercept_fit_agrees_with_the_full_fit() {
+        let mut rng = StdRng::seed_from_u64(3);
+        let noise = Normal::new(0.0, 0.05).unwrap();
+        for slope in [-3.0, -0.5, 0.0, 0.2, 4.0] {
+            let pts: Vec<_> = (0..60)
+                .map(|i| {
+                    let x = i as f64 * 0.05;
+                    Point2::new(x, slope * x + 1.0 + noise.sample(&mut rng))
+                })
+                .collect();
+            let a = fit_pca_slope_intercept(&pts).unwrap();
+            let b = fit_pca(&pts).unwrap().slope_intercept().unwrap();
+            assert!((a.m - b.m).abs() < 1e-9 && (a.n - b.n).abs() < 1e-9, "{a:?} {b:?}");
+        }
+        let vertical: Vec<_> = (0..5).map(|i| Point2::new(1.0, i as f64)).collect();
+        assert!(fit_pca_slope_intercept(&vertical).is_none());
+        assert!(fit_pca_slope_intercept(&[Point2::new(1.0, 1.0); 4]).is_none());
     }
 
     #[test]

@@ -45,14 +45,32 @@ pub fn level1_clusters(
     }
     breaks.push(0);
     let mut start = 0;
-    for j in 1..n {
-        let d_angle = (points.angle_rad[j] - points.angle_rad[j - 1]).abs();
-        if is_break(points, j - 1, j, d_angle, rule) {
-            breaks.push(j);
-            if j - start >= min_points {
-                clusters.push(start..j);
+    let mut on_break = |j: usize| {
+        breaks.push(j);
+        if j - start >= min_points {
+            clusters.push(start..j);
+        }
+        start = j;
+    };
+    // One tight loop per rule, so the rule is matched once, not per point.
+    let xy = &points.xy;
+    match *rule {
+        BreakRule::Fixed { dth_m } => {
+            let t2 = dth_m * dth_m;
+            for j in 1..n {
+                if (xy[j] - xy[j - 1]).norm_squared() > t2 {
+                    on_break(j);
+                }
             }
-            start = j;
+        }
+        BreakRule::Adaptive { .. } => {
+            let mut cached = CachedRule::new(rule);
+            for j in 1..n {
+                let step = (points.angle_rad[j] - points.angle_rad[j - 1]).abs();
+                if cached.is_break(points, j - 1, j, step) {
+                    on_break(j);
+                }
+            }
         }
     }
     if n - start >= min_points {
@@ -77,10 +95,37 @@ pub fn seam_start(points: &ScanPoints, rule: &BreakRule) -> Option<usize> {
     if is_break(points, last, 0, wrap_gap.abs(), rule) {
         return Some(0);
     }
+    let mut cached = CachedRule::new(rule);
     (1..n).find(|&j| {
         let d_angle = (points.angle_rad[j] - points.angle_rad[j - 1]).abs();
-        is_break(points, j - 1, j, d_angle, rule)
+        cached.is_break(points, j - 1, j, d_angle)
     })
+}
+
+/// A rule with its angular factor cached for the last bearing step: in a
+/// scan, consecutive valid beams are almost always one increment apart, so
+/// the trigonometry runs once per distinct step instead of once per point.
+struct CachedRule<'a> {
+    rule: &'a BreakRule,
+    step: f64,
+    factor: f64,
+}
+
+impl<'a> CachedRule<'a> {
+    fn new(rule: &'a BreakRule) -> Self {
+        CachedRule { rule, step: f64::NAN, factor: 0.0 }
+    }
+
+    #[inline(always)]
+    fn is_break(&mut self, points: &ScanPoints, i: usize, j: usize, step: f64) -> bool {
+        if (step - self.step).abs() > 1e-12 || self.step.is_nan() {
+            self.step = step;
+            self.factor = self.rule.angular_factor(step);
+        }
+        let dist2 = (points.xy[j] - points.xy[i]).norm_squared();
+        let t = self.rule.threshold_with_factor(points.range_m[i], points.range_m[j], self.factor);
+        dist2 > t * t
+    }
 }
 
 #[cfg(test)]

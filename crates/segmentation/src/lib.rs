@@ -79,13 +79,30 @@ impl BreakRule {
     /// separated by `delta_angle_rad`.
     #[inline]
     pub fn threshold_m(&self, r_i: f64, r_j: f64, delta_angle_rad: f64) -> f64 {
+        self.threshold_with_factor(r_i, r_j, self.angular_factor(delta_angle_rad))
+    }
+
+    /// The angular part of the adaptive threshold,
+    /// `sin(dtheta) / sin(lambda - dtheta)` (0 for the fixed rule). It depends
+    /// only on the bearing step, so callers cache it across beams.
+    #[inline]
+    pub fn angular_factor(&self, delta_angle_rad: f64) -> f64 {
+        match *self {
+            BreakRule::Fixed { .. } => 0.0,
+            BreakRule::Adaptive { lambda_rad, .. } => {
+                let dphi = delta_angle_rad.min(0.5 * lambda_rad);
+                dphi.sin() / (lambda_rad - dphi).sin()
+            }
+        }
+    }
+
+    /// The threshold given the cached [`BreakRule::angular_factor`].
+    #[inline]
+    pub fn threshold_with_factor(&self, r_i: f64, r_j: f64, factor: f64) -> f64 {
         match *self {
             BreakRule::Fixed { dth_m } => dth_m,
-            BreakRule::Adaptive { lambda_rad, sigma_factor, noise } => {
-                let r = r_i.min(r_j);
-                let dphi = delta_angle_rad.min(0.5 * lambda_rad);
-                r * dphi.sin() / (lambda_rad - dphi).sin()
-                    + sigma_factor * noise.sigma_at(r_i.max(r_j))
+            BreakRule::Adaptive { sigma_factor, noise, .. } => {
+                r_i.min(r_j) * factor + sigma_factor * noise.sigma_at(r_i.max(r_j))
             }
         }
     }

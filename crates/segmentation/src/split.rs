@@ -51,17 +51,21 @@ fn farthest_split(
     let b = points.xy[r.end - 1];
     let chord = b - a;
     let len = chord.norm();
-    let mut best = (0.0f64, 0usize, 0.0f64);
+    // Maximise distance / threshold without a division per point: the
+    // threshold takes one of two values (near and far noise).
+    let inv = |sigma: f64| 1.0 / (sigma_factor * sigma).max(min_distance_m).max(1e-12);
+    let (inv_near, inv_far) = (inv(noise.near_sigma_m), inv(noise.far_sigma_m));
+    let mut best = (0.0f64, 0usize);
     for k in r.start + 1..r.end - 1 {
         let v = points.xy[k] - a;
-        let dist = if len > 1e-12 { (chord.x * v.y - chord.y * v.x).abs() / len } else { v.norm() };
-        // Compare each point's distance with its own noise-based threshold.
-        let thr = (sigma_factor * noise.sigma_at(points.range_m[k])).max(min_distance_m);
-        let excess = dist / thr;
+        let dist = if len > 1e-12 { (chord.x * v.y - chord.y * v.x).abs() } else { v.norm() };
+        let scale = if points.range_m[k] < noise.far_from_m { inv_near } else { inv_far };
+        let excess = dist * scale;
         if excess > best.0 {
-            best = (excess, k, dist);
+            best = (excess, k);
         }
     }
+    let best = (if len > 1e-12 { best.0 / len } else { best.0 }, best.1);
     (best.0 > 1.0).then_some(best.1)
 }
 
