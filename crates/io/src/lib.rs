@@ -1,7 +1,8 @@
-//! File formats for pcaline: scene files (TOML/JSON) now; scans, logs, lines
-//! and maps as they are added. Only this crate knows file formats. Every
-//! error names the file and, where it can, the line or item; every output is
-//! written atomically.
+//! File formats for pcaline: scene files (TOML/JSON); logs of scans (CARMEN,
+//! ROS 1 bags, ROS 2 sqlite3 bags, MCAP, JSON, CSV) read by [`read_log`],
+//! streaming; relation files. Only this crate knows file formats. Every error
+//! names the file and, where it can, the line, message or item; every output
+//! is written atomically.
 //!
 //! ```no_run
 //! use pcaline_io::read_scene;
@@ -11,9 +12,23 @@
 //! ```
 
 mod atomic;
+mod carmen;
 mod error;
+mod laserscan_codec;
+mod log;
+mod record;
+mod relations;
+mod ros;
+mod scan_text;
 mod scene_file;
 
 pub use atomic::{write_atomic, write_atomic_with};
+pub use carmen::{CarmenOptions, CarmenReader};
 pub use error::IoError;
+pub use laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1, encode_laserscan_cdr};
+pub use log::{LogFormat, LogOptions, read_log};
+pub use record::{LogRecord, OdometryRecord, ScanRecord};
+pub use relations::{Relation, read_relations};
+pub use ros::{read_mcap, read_ros1_bag, read_ros2_bag};
+pub use scan_text::{ScanJson, read_scan_csv, read_scan_json, scans_to_csv};
 pub use scene_file::{parse_scene, read_scene, write_scene};

@@ -1,0 +1,270 @@
+//! CARMEN logs (`.clf`, `.log`): `FLASER`, `ROBOTLASER1`, `ODOM`; `PARAM`,
+//! `NEFF`, `SYNC` and other messages are skipped; `#` starts a comment.
+//! Streams line by line: a long log is never held in memory.
+//!
+//! `FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp`:
+//! the line does not carry the field of view. 180 beams mean 1° from -90°,
+//! 181 beams 1° from -90° to +90°, 361 beams 0.5° from -90°; any other count
+//! needs an explicit field of view ([`CarmenOptions::fov_rad`]), spread over
+//! the beams symmetric about the x axis. "No return" is written as the
+//! sensor's maximum (81.91 in CSAIL, 81.83 in Intel): ranges at or beyond
+//! [`CarmenOptions::max_range_m`] become +inf.
+
+use crate::{IoError, LogRecord, OdometryRecord, ScanRecord};
+use pcaline_geometry::{Pose2, Scan};
+use std::f64::consts::PI;
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
+
+/// Options of the CARMEN reader.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CarmenOptions {
+    /// Field of view for `FLASER` lines, radians; `None` infers it from the
+    /// beam count (180: 180° in 1° steps from -90°; 181: 180° with both ends;
+    /// 361: 180° in 0.5° steps).
+    pub fov_rad: Option<f64>,
+    /// Ranges at or above this are "no return" (+inf), metres.
+    pub max_range_m: f64,
+    /// Offset added to the log's timestamps, seconds.
+    pub time_offset_s: f64,
+}
+
+impl Default for CarmenOptions {
+    fn default() -> Self {
+        CarmenOptions { fov_rad: None, max_range_m: 80.0, time_offset_s: 0.0 }
+    }
+}
+
+/// A streaming reader of a CARMEN log.
+pub struct CarmenReader<R> {
+    input: R,
+    path: PathBuf,
+    options: CarmenOptions,
+    line_no: usize,
+    buf: String,
+}
+
+impl CarmenReader<std::io::BufReader<std::fs::File>> {
+    /// Opens a CARMEN log file.
+    pub fn open(path: &Path, options: CarmenOptions) -> Result<Self, IoError> {
+        let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+        Ok(Self::new(std::io::BufReader::new(file), path, options))
+    }
+}
+
+impl<R: BufRead> CarmenReader<R> {
+    /// A reader over any buffered input; `path` names it in errors.
+    pub fn new(input: R, path: &Path, options: CarmenOptions) -> Self {
+        CarmenReader { input, path: path.to_path_buf(), options, line_no: 0, buf: String::new() }
+    }
+
+    fn err(&self, message: impl Into<String>) -> IoError {
+        IoError::parse(&self.path, Some(self.line_no), message)
+    }
+
+    fn parse_line(&self, line: &str) -> Result<Option<LogRecord>, IoError> {
+        let mut fields = line.split_ascii_whitespace();
+        let Some(kind) = fields.next() else { return Ok(None) };
+        if kind.starts_with('#') {
+            return Ok(None);
+        }
+        let rest: Vec<&str> = fields.collect();
+        match kind {
+            "FLASER" => self.flaser(&rest).map(Some),
+            "ROBOTLASER1" => self.robotlaser(&rest).map(Some),
+            "ODOM" => self.odom(&rest).map(Some),
+            _ => Ok(None), // PARAM, NEFF, SYNC, RAWLASER*, ...: not used
+        }
+    }
+
+    fn num(&self, fields: &[&str], i: usize, what: &str) -> Result<f64, IoError> {
+        let s = fields.get(i).ok_or_else(|| self.err(format!("truncated line: no {what}")))?;
+        s.parse::<f64>().map_err(|_| self.err(format!("{what} is not a number: {s:?}")))
+    }
+
+    fn count(&self, fields: &[&str], i: usize, what: &str) -> Result<usize, IoError> {
+        let v = self.num(fields, i, what)?;
+        if v < 0.0 || v.fract() != 0.0 || v > 1e6 {
+            return Err(self.err(format!("{what} is not a count: {v}")));
+        }
+        Ok(v as usize)
+    }
+
+    fn ranges(&self, fields: &[&str], start: usize, n: usize) -> Result<Vec<f32>, IoError> {
+        (0..n)
+            .map(|k| {
+                let r = self.num(fields, start + k, &format!("range {}", k + 1))?;
+                Ok(if r >= self.options.max_range_m || r.is_nan() {
+                    f32::INFINITY
+                } else {
+                    r as f32
+                })
+            })
+            .collect()
+    }
+
+    fn flaser(&self, f: &[&str]) -> Result<LogRecord, IoError> {
+        let n = self.count(f, 0, "beam count")?;
+        let ranges = self.ranges(f, 1, n)?;
+        let p = 1 + n;
+        let pose = Pose2::new(
+            self.num(f, p, "x")?,
+            self.num(f, p + 1, "y")?,
+            self.num(f, p + 2, "theta")?,
+        );
+        let odom = Pose2::new(
+            self.num(f, p + 3, "odom_x")?,
+            self.num(f, p + 4, "odom_y")?,
+            self.num(f, p + 5, "odom_theta")?,
+        );
+        let stamp = self.num(f, p + 6, "ipc_timestamp")? + self.options.time_offset_s;
+        let (angle_min, increment) = match self.options.fov_rad {
+            Some(fov) if n > 1 => (-fov / 2.0, fov / (n - 1) as f64),
+            Some(fov) => (0.0, fov),
+            None => match n {
+                180 => (-PI / 2.0, PI / 180.0),
+                181 => (-PI / 2.0, PI / 180.0),
+                361 => (-PI / 2.0, PI / 360.0),
+                _ => {
+                    return Err(self.err(format!(
+                        "FLASER with {n} beams: the field of view is ambiguous, give it (--fov)"
+                    )));
+                }
+            },
+        };
+        let scan = Scan::new(
+            angle_min as f32,
+            increment as f32,
+            0.0,
+            self.options.max_range_m as f32,
+            ranges,
+        )
+        .with_stamp(stamp);
+        Ok(LogRecord::Scan(ScanRecord {
+            scan,
+            pose: Some(pose),
+            odometry: Some(odom),
+            position: self.line_no,
+        }))
+    }
+
+    fn robotlaser(&self, f: &[&str]) -> Result<LogRecord, IoError> {
+        // laser_type start_angle fov angular_res max_range accuracy remission_mode n r1..rn
+        let start = self.num(f, 1, "start_angle")?;
+        let res = self.num(f, 3, "angular_res")?;
+        let max_range = self.num(f, 4, "max_range")?;
+        let n = self.count(f, 7, "beam count")?;
+        let max = if max_range > 0.0 {
+            max_range.min(self.options.max_range_m)
+        } else {
+            self.options.max_range_m
+        };
+        let ranges: Vec<f32> = self
+            .ranges(f, 8, n)?
+            .into_iter()
+            .map(|r| if f64::from(r) >= max { f32::INFINITY } else { r })
+            .collect();
+        let m = self.count(f, 8 + n, "remission count")?;
+        let p = 9 + n + m;
+        let laser = Pose2::new(
+            self.num(f, p, "laser_x")?,
+            self.num(f, p + 1, "laser_y")?,
+            self.num(f, p + 2, "laser_theta")?,
+        );
+        let robot = Pose2::new(
+            self.num(f, p + 3, "robot_x")?,
+            self.num(f, p + 4, "robot_y")?,
+            self.num(f, p + 5, "robot_theta")?,
+        );
+        let stamp = self.num(f, p + 11, "ipc_timestamp")? + self.options.time_offset_s;
+        let scan = Scan::new(start as f32, res as f32, 0.0, max as f32, ranges).with_stamp(stamp);
+        Ok(LogRecord::Scan(ScanRecord {
+            scan,
+            pose: Some(laser),
+            odometry: Some(robot),
+            position: self.line_no,
+        }))
+    }
+
+    fn odom(&self, f: &[&str]) -> Result<LogRecord, IoError> {
+        let pose = Pose2::new(self.num(f, 0, "x")?, self.num(f, 1, "y")?, self.num(f, 2, "theta")?);
+        let stamp = self.num(f, 6, "ipc_timestamp")? + self.options.time_offset_s;
+        Ok(LogRecord::Odometry(OdometryRecord { pose, stamp_s: stamp, position: self.line_no }))
+    }
+}
+
+impl<R: BufRead> Iterator for CarmenReader<R> {
+    type Item = Result<LogRecord, IoError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            self.buf.clear();
+            self.line_no += 1;
+            match self.input.read_line(&mut self.buf) {
+                Ok(0) => return None,
+                Ok(_) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::InvalidData => {
+                    return Some(Err(self.err("not text (invalid UTF-8)")));
+                }
+                Err(e) => return Some(Err(IoError::io(&self.path, e))),
+            }
+            let line = std::mem::take(&mut self.buf);
+            let parsed = self.parse_line(&line);
+            self.buf = line;
+            match parsed {
+                Ok(Some(record)) => return Some(Ok(record)),
+                Ok(None) => continue,
+                Err(e) => return Some(Err(e)),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str, options: CarmenOptions) -> Vec<Result<LogRecord, IoError>> {
+        CarmenReader::new(text.as_bytes(), Path::new("t.clf"), options).collect()
+    }
+
+    #[test]
+    fn flaser_odom_and_comments() {
+        let mut line = String::from("FLASER 180");
+        for i in 0..180 {
+            line.push_str(if i == 5 { " 81.91" } else { " 2.5" });
+        }
+        line.push_str(" 1 2 0.5 1.1 2.1 0.6 12.5 host 12.6\n");
+        let text = format!("# comment\nPARAM robot_x 1\nODOM 1 2 0.1 0 0 0 3.0 host 3.0\n{line}");
+        let records = read(&text, CarmenOptions::default());
+        assert_eq!(records.len(), 2);
+        let LogRecord::Scan(s) = records[1].as_ref().unwrap() else { panic!() };
+        assert_eq!(s.scan.len(), 180);
+        assert_eq!(s.scan.ranges[5], f32::INFINITY);
+        assert_eq!(s.scan.stamp_s, Some(12.5));
+        assert!((f64::from(s.scan.angle_min) + PI / 2.0).abs() < 1e-6);
+        assert_eq!(s.position, 4);
+        assert_eq!(s.pose.unwrap().x, 1.0);
+        assert_eq!(s.odometry.unwrap().x, 1.1);
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = read("ODOM 1 2\n", CarmenOptions::default()).remove(0).unwrap_err().to_string();
+        assert_eq!(e, "t.clf:1: truncated line: no theta");
+        let e = read("\n\nFLASER 2 1.0 x\n", CarmenOptions::default())
+            .remove(0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("t.clf:3: range 2 is not a number"), "{e}");
+        let e = read("FLASER 360 1\n", CarmenOptions::default()).remove(0).unwrap_err().to_string();
+        assert!(e.contains("truncated") || e.contains("ambiguous"), "{e}");
+        let mut line = String::from("FLASER 360");
+        line.push_str(&" 1.0".repeat(360));
+        line.push_str(" 0 0 0 0 0 0 1 h 1\n");
+        let e = read(&line, CarmenOptions::default()).remove(0).unwrap_err().to_string();
+        assert!(e.contains("ambiguous"), "{e}");
+        let ok = read(&line, CarmenOptions { fov_rad: Some(PI), ..Default::default() });
+        assert!(ok[0].is_ok());
+    }
+}

@@ -1,0 +1,180 @@
+//! `sensor_msgs/LaserScan` decoding: ROS 2 CDR and ROS 1 serialization.
+//! (And CDR encoding, to write MCAP and bag files for tests and examples.)
+//!
+//! Both layouts: `Header` (stamp, frame_id), then `angle_min`, `angle_max`,
+//! `angle_increment`, `time_increment`, `scan_time`, `range_min`,
+//! `range_max` (float32), then `ranges` and `intensities` (float32
+//! sequences). ROS 2 CDR starts with a 4-byte encapsulation header (byte 1
+//! is 1 for little-endian) and aligns each primitive to its size, counted
+//! from the end of that header; its `Header` has no `seq` and its time is
+//! `int32 sec, uint32 nanosec`. ROS 1 is packed little-endian with a
+//! `uint32 seq` first.
+
+use pcaline_geometry::Scan;
+
+/// A bounds-checked reader of primitive values.
+struct Cursor<'a> {
+    data: &'a [u8],
+    pos: usize,
+    base: usize,
+    little: bool,
+    align: bool,
+}
+
+impl<'a> Cursor<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        if self.align && n > 1 {
+            let off = (self.pos - self.base) % n;
+            if off != 0 {
+                self.pos += n - off;
+            }
+        }
+        let end = self.pos.checked_add(n).filter(|e| *e <= self.data.len());
+        let Some(end) = end else {
+            return Err(format!("truncated at byte {} reading {what}", self.pos));
+        };
+        let s = &self.data[self.pos..end];
+        self.pos = end;
+        Ok(s)
+    }
+
+    fn u32(&mut self, what: &str) -> Result<u32, String> {
+        let b: [u8; 4] = self.take(4, what)?.try_into().map_err(|_| what.to_string())?;
+        Ok(if self.little { u32::from_le_bytes(b) } else { u32::from_be_bytes(b) })
+    }
+
+    fn f32(&mut self, what: &str) -> Result<f32, String> {
+        Ok(f32::from_bits(self.u32(what)?))
+    }
+
+    fn string(&mut self, what: &str) -> Result<String, String> {
+        let len = self.u32(what)? as usize;
+        let bytes = self.take_bytes(len, what)?;
+        Ok(String::from_utf8_lossy(bytes).trim_end_matches('\0').to_string())
+    }
+
+    fn take_bytes(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        let align = std::mem::replace(&mut self.align, false);
+        let r = self.take(n, what);
+        self.align = align;
+        r
+    }
+
+    fn f32_seq(&mut self, what: &str) -> Result<Vec<f32>, String> {
+        let n = self.u32(what)? as usize;
+        if n.saturating_mul(4) > self.data.len().saturating_sub(self.pos) + 4 {
+            return Err(format!("{what}: {n} values do not fit in the message"));
+        }
+        (0..n).map(|_| self.f32(what)).collect()
+    }
+}
+
+/// The fields after the header, shared by both layouts.
+fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
+    let angle_min = c.f32("angle_min")?;
+    let _angle_max = c.f32("angle_max")?;
+    let angle_increment = c.f32("angle_increment")?;
+    let _time_increment = c.f32("time_increment")?;
+    let _scan_time = c.f32("scan_time")?;
+    let range_min = c.f32("range_min")?;
+    let range_max = c.f32("range_max")?;
+    let ranges = c.f32_seq("ranges")?;
+    let intensities = c.f32_seq("intensities")?;
+    let mut scan =
+        Scan::new(angle_min, angle_increment, range_min, range_max, ranges).with_stamp(stamp_s);
+    if !intensities.is_empty() {
+        scan.intensities = Some(intensities);
+    }
+    Ok(scan)
+}
+
+/// Decodes a ROS 2 `sensor_msgs/msg/LaserScan` in CDR (with its
+/// encapsulation header). Errors say what was being read where.
+pub fn decode_laserscan_cdr(data: &[u8]) -> Result<Scan, String> {
+    if data.len() < 4 {
+        return Err("shorter than the CDR encapsulation header".into());
+    }
+    let little = match data[1] {
+        0 | 2 => false,
+        1 | 3 => true,
+        k => return Err(format!("unknown CDR encapsulation kind {k}")),
+    };
+    let mut c = Cursor { data, pos: 4, base: 4, little, align: true };
+    let sec = c.u32("header.stamp.sec")? as i32;
+    let nanosec = c.u32("header.stamp.nanosec")?;
+    let _frame = c.string("header.frame_id")?;
+    body(&mut c, f64::from(sec) + f64::from(nanosec) * 1e-9)
+}
+
+/// Decodes a ROS 1 `sensor_msgs/LaserScan`.
+pub fn decode_laserscan_ros1(data: &[u8]) -> Result<Scan, String> {
+    let mut c = Cursor { data, pos: 0, base: 0, little: true, align: false };
+    let _seq = c.u32("header.seq")?;
+    let sec = c.u32("header.stamp.secs")?;
+    let nsec = c.u32("header.stamp.nsecs")?;
+    let _frame = c.string("header.frame_id")?;
+    body(&mut c, f64::from(sec) + f64::from(nsec) * 1e-9)
+}
+
+/// Encodes a scan as a little-endian CDR `sensor_msgs/msg/LaserScan`.
+pub fn encode_laserscan_cdr(scan: &Scan, frame_id: &str) -> Vec<u8> {
+    let mut out = vec![0u8, 1, 0, 0];
+    let pad = |out: &mut Vec<u8>, n: usize| {
+        while (out.len() - 4) % n != 0 {
+            out.push(0);
+        }
+    };
+    let stamp = scan.stamp_s.unwrap_or(0.0);
+    let sec = stamp.floor();
+    out.extend_from_slice(&(sec as i32).to_le_bytes());
+    out.extend_from_slice(&(((stamp - sec) * 1e9).round() as u32).to_le_bytes());
+    out.extend_from_slice(&(frame_id.len() as u32 + 1).to_le_bytes());
+    out.extend_from_slice(frame_id.as_bytes());
+    out.push(0);
+    pad(&mut out, 4);
+    let n = scan.ranges.len();
+    let angle_max = scan.angle_min + scan.angle_increment * n.saturating_sub(1) as f32;
+    for v in
+        [scan.angle_min, angle_max, scan.angle_increment, 0.0, 0.0, scan.range_min, scan.range_max]
+    {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for seq in [&scan.ranges[..], scan.intensities.as_deref().unwrap_or(&[])] {
+        out.extend_from_slice(&(seq.len() as u32).to_le_bytes());
+        for v in seq {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn cdr_round_trip() {
+        let mut scan =
+            Scan::new(-2.35, 0.0043, 0.02, 60.0, vec![1.0, f32::INFINITY, 2.5]).with_stamp(17.25);
+        scan.intensities = Some(vec![3.0, 4.0, 5.0]);
+        let bytes = encode_laserscan_cdr(&scan, "laser");
+        let back = decode_laserscan_cdr(&bytes).unwrap();
+        assert_eq!(back, scan);
+    }
+
+    #[test]
+    fn truncation_is_an_error_naming_the_field() {
+        let bytes = encode_laserscan_cdr(&Scan::new(0.0, 0.1, 0.0, 10.0, vec![1.0; 10]), "f");
+        let e = decode_laserscan_cdr(&bytes[..bytes.len() - 10]).unwrap_err();
+        assert!(e.contains("ranges") || e.contains("intensities"), "{e}");
+    }
+
+    proptest! {
+        #[test]
+        fn random_bytes_never_panic(data in prop::collection::vec(any::<u8>(), 0..300)) {
+            let _ = decode_laserscan_cdr(&data);
+            let _ = decode_laserscan_ros1(&data);
+        }
+    }
+}

@@ -1,0 +1,268 @@
+//! Scans as JSON or CSV.
+//!
+//! JSON: one scan object, an array of them, or one object per line (JSON
+//! Lines). A scan object is either pcaline's form
+//! `{"angle_min", "angle_increment", "range_min", "range_max", "ranges",
+//! "intensities"?, "stamp_s"?}` (radians, metres; `null` or a missing value
+//! in `ranges` is no return), or the form of the laser_line_extraction
+//! examples, `{"ranges": [...], "bearings": [...]}` with evenly spaced
+//! bearings (then `range_min` is 0 and `range_max` unbounded).
+//!
+//! CSV: a header line, then one scan per line:
+//! `stamp_s,angle_min,angle_increment,range_min,range_max,r0,r1,...`
+//! (empty, `nan` or `inf` cells are no return; lines may have different
+//! beam counts).
+
+use crate::{IoError, LogRecord, ScanRecord};
+use pcaline_geometry::Scan;
+use serde::{Deserialize, Serialize};
+use std::io::BufRead;
+use std::ops::ControlFlow;
+use std::path::Path;
+
+/// pcaline's JSON form of a scan.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScanJson {
+    /// Bearing of the first beam, radians.
+    pub angle_min: f32,
+    /// Angle between beams, radians.
+    pub angle_increment: f32,
+    /// Smallest valid range, metres.
+    pub range_min: f32,
+    /// Largest range, metres.
+    pub range_max: f32,
+    /// Ranges, metres; `null` is no return.
+    pub ranges: Vec<Option<f32>>,
+    /// Intensities.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intensities: Option<Vec<f32>>,
+    /// Time, seconds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stamp_s: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BearingsJson {
+    ranges: Vec<Option<f32>>,
+    bearings: Vec<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum AnyScan {
+    Full(ScanJson),
+    Bearings(BearingsJson),
+}
+
+impl From<&Scan> for ScanJson {
+    fn from(s: &Scan) -> Self {
+        ScanJson {
+            angle_min: s.angle_min,
+            angle_increment: s.angle_increment,
+            range_min: s.range_min,
+            range_max: s.range_max,
+            ranges: s.ranges.iter().map(|r| r.is_finite().then_some(*r)).collect(),
+            intensities: s.intensities.clone(),
+            stamp_s: s.stamp_s,
+        }
+    }
+}
+
+fn to_scan(any: AnyScan) -> Result<Scan, String> {
+    let ranges =
+        |v: Vec<Option<f32>>| v.into_iter().map(|r| r.unwrap_or(f32::INFINITY)).collect::<Vec<_>>();
+    match any {
+        AnyScan::Full(j) => {
+            if let Some(i) = &j.intensities
+                && i.len() != j.ranges.len()
+            {
+                return Err(format!("{} intensities for {} ranges", i.len(), j.ranges.len()));
+            }
+            let mut scan = Scan::new(
+                j.angle_min,
+                j.angle_increment,
+                j.range_min,
+                j.range_max,
+                ranges(j.ranges),
+            );
+            scan.intensities = j.intensities;
+            scan.stamp_s = j.stamp_s;
+            Ok(scan)
+        }
+        AnyScan::Bearings(b) => {
+            let n = b.ranges.len();
+            if b.bearings.len() != n {
+                return Err(format!(
+                    "{} bearings for {n} ranges (beam count mismatch)",
+                    b.bearings.len()
+                ));
+            }
+            if n < 2 {
+                return Err("fewer than 2 beams: no bearing increment".into());
+            }
+            let inc = (b.bearings[n - 1] - b.bearings[0]) / (n - 1) as f64;
+            for (k, a) in b.bearings.iter().enumerate() {
+                if (a - (b.bearings[0] + inc * k as f64)).abs() > 1e-4 {
+                    return Err(format!("bearing {k} is not evenly spaced"));
+                }
+            }
+            Ok(Scan::new(b.bearings[0] as f32, inc as f32, 0.0, f32::INFINITY, ranges(b.ranges)))
+        }
+    }
+}
+
+/// Streams the scans of a JSON file: a top-level array is read whole; a
+/// single object or JSON Lines stream object by object.
+pub fn read_scan_json(
+    path: &Path,
+    visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
+) -> Result<usize, IoError> {
+    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    let mut reader = std::io::BufReader::new(file);
+    let first = loop {
+        let buf = reader.fill_buf().map_err(|e| IoError::io(path, e))?;
+        match buf.iter().position(|b| !b.is_ascii_whitespace()) {
+            Some(k) => break Some(buf[k]),
+            None if buf.is_empty() => break None,
+            None => {
+                let n = buf.len();
+                reader.consume(n);
+            }
+        }
+    };
+    let mut count = 0;
+    let mut emit = |scan: Scan, position: usize| {
+        count += 1;
+        visit(LogRecord::Scan(ScanRecord { scan, pose: None, odometry: None, position }))
+    };
+    let parse_err = |e: serde_json::Error| IoError::parse(path, Some(e.line()), e.to_string());
+    match first {
+        None => return Err(IoError::parse(path, Some(1), "empty file: no scan")),
+        Some(b'[') => {
+            let all: Vec<AnyScan> = serde_json::from_reader(reader).map_err(parse_err)?;
+            for (i, s) in all.into_iter().enumerate() {
+                let scan = to_scan(s)
+                    .map_err(|m| IoError::parse(path, None, format!("scan {}: {m}", i + 1)))?;
+                if emit(scan, i + 1).is_break() {
+                    break;
+                }
+            }
+        }
+        Some(_) => {
+            let stream = serde_json::Deserializer::from_reader(reader).into_iter::<AnyScan>();
+            for (i, item) in stream.enumerate() {
+                let s = item.map_err(parse_err)?;
+                let scan = to_scan(s)
+                    .map_err(|m| IoError::parse(path, None, format!("scan {}: {m}", i + 1)))?;
+                if emit(scan, i + 1).is_break() {
+                    break;
+                }
+            }
+        }
+    }
+    Ok(count)
+}
+
+/// Streams the scans of a CSV file, line by line.
+pub fn read_scan_csv(
+    path: &Path,
+    visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
+) -> Result<usize, IoError> {
+    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    let mut count = 0;
+    for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
+        let line_no = i + 1;
+        let line =
+            line.map_err(|e| IoError::parse(path, Some(line_no), format!("not text: {e}")))?;
+        if line_no == 1 {
+            if !line.trim_start().starts_with("stamp_s") {
+                return Err(IoError::parse(
+                    path,
+                    Some(1),
+                    "expected the header stamp_s,angle_min,angle_increment,range_min,range_max,r0,...",
+                ));
+            }
+            continue;
+        }
+        if line.trim().is_empty() {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        if cells.len() < 5 {
+            return Err(IoError::parse(
+                path,
+                Some(line_no),
+                format!("{} columns, need at least 5", cells.len()),
+            ));
+        }
+        let num = |k: usize, name: &str| -> Result<f64, IoError> {
+            cells[k].parse::<f64>().map_err(|_| {
+                IoError::parse(
+                    path,
+                    Some(line_no),
+                    format!("{name} is not a number: {:?}", cells[k]),
+                )
+            })
+        };
+        let stamp = num(0, "stamp_s")?;
+        let (amin, inc, rmin, rmax) = (
+            num(1, "angle_min")?,
+            num(2, "angle_increment")?,
+            num(3, "range_min")?,
+            num(4, "range_max")?,
+        );
+        let ranges = cells[5..]
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                if c.is_empty() {
+                    Ok(f32::INFINITY)
+                } else {
+                    c.parse::<f32>().map_err(|_| {
+                        IoError::parse(path, Some(line_no), format!("r{k} is not a number: {c:?}"))
+                    })
+                }
+            })
+            .collect::<Result<Vec<f32>, _>>()?;
+        let scan =
+            Scan::new(amin as f32, inc as f32, rmin as f32, rmax as f32, ranges).with_stamp(stamp);
+        count += 1;
+        if visit(LogRecord::Scan(ScanRecord {
+            scan,
+            pose: None,
+            odometry: None,
+            position: line_no,
+        }))
+        .is_break()
+        {
+            break;
+        }
+    }
+    Ok(count)
+}
+
+/// Writes scans as CSV text (the form [`read_scan_csv`] reads).
+pub fn scans_to_csv<'a>(scans: impl IntoIterator<Item = &'a Scan>) -> String {
+    let mut out = String::from("stamp_s,angle_min,angle_increment,range_min,range_max,ranges...\n");
+    for s in scans {
+        out.push_str(&format!(
+            "{},{},{},{},{}",
+            s.stamp_s.unwrap_or(0.0),
+            s.angle_min,
+            s.angle_increment,
+            s.range_min,
+            s.range_max
+        ));
+        for r in &s.ranges {
+            if r.is_finite() {
+                out.push_str(&format!(",{r}"));
+            } else {
+                out.push(',');
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
