@@ -8,7 +8,11 @@
 // The one crate that talks to a terminal.
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+mod detect;
+mod draw;
 mod exit;
+mod log_args;
+mod map_cmd;
 mod progress;
 mod reproduce;
 mod run;
@@ -34,13 +38,26 @@ const EXAMPLES: &str = "Examples:
   pcaline run sim-scenes/hall-pillars.toml --seed 3 --out out/hall
   pcaline scene check sim-scenes/*.toml
   pcaline scene generate --seed 7 --cols 6 --rows 4 -o my-maze.toml
-  pcaline reproduce all                         the paper's Tables 1-3 and ETh experiment";
+  pcaline reproduce all                         the paper's Tables 1-3 and ETh experiment
+  pcaline detect scans.bag --csv -o lines.csv   lines of every scan of a ROS 1 bag
+  pcaline detect log.clf --fov 180               CARMEN FLASER lines of unusual beam counts
+  pcaline map mit-csail.clf --out out/csail      line map and aided trajectory of a log
+  pcaline draw scan scans.db3 --index 40 -o scan.svg   one scan as in the paper's Figures 1-3";
 
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Simulate a scene (default: the embedded paper-like maze), detect lines
     /// in every scan, and write pictures and JSON to an output folder.
     Run(run::RunArgs),
+    /// Detect the lines of every scan of a log or scan file (CARMEN, ROS 1
+    /// bag, ROS 2 bag, MCAP, JSON, CSV) and write them as JSON or CSV.
+    Detect(detect::DetectArgs),
+    /// Build the line map and the aided trajectory of a log, with the log's
+    /// odometry as the localization source.
+    Map(map_cmd::MapArgs),
+    /// Pictures: one scan with its break-points, clusters and lines.
+    #[command(subcommand)]
+    Draw(draw::DrawCommand),
     /// Generate, check or draw scene files.
     #[command(subcommand)]
     Scene(scene_cmd::SceneCommand),
@@ -54,6 +71,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(&args, cli.quiet),
         Command::Scene(cmd) => scene_cmd::run(&cmd, cli.quiet),
+        Command::Detect(args) => detect::run(&args, cli.quiet),
+        Command::Map(args) => map_cmd::run(&args, cli.quiet),
+        Command::Draw(cmd) => draw::run(&cmd, cli.quiet),
         Command::Reproduce(args) => reproduce::run(&args, cli.quiet),
     };
     match result {

@@ -16,3 +16,17 @@ pub fn bar(len: u64, what: &str, quiet: bool) -> ProgressBar {
     bar.set_message(what.to_string());
     bar
 }
+
+/// A spinner counting items of unknown total (a streamed log), hidden when
+/// stderr is not a terminal or output is quiet.
+pub fn spinner(what: &str, quiet: bool) -> ProgressBar {
+    let bar = ProgressBar::new_spinner();
+    if quiet || !std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    if let Ok(style) = ProgressStyle::with_template("{spinner} {pos} {msg}") {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
+}

@@ -52,14 +52,16 @@ pub enum Preset {
 }
 
 impl Preset {
-    fn mapper(self) -> MapperConfig {
+    /// Detector, map and aiding of the preset.
+    pub fn mapper(self) -> MapperConfig {
         match self {
             Preset::Default => MapperConfig::default(),
             Preset::Paper => MapperConfig::paper(),
         }
     }
 
-    fn heading_aiding(self) -> AidingConfig {
+    /// The heading aiding of the preset.
+    pub fn heading_aiding(self) -> AidingConfig {
         match self {
             Preset::Default => AidingConfig::heading(),
             Preset::Paper => AidingConfig::paper(),

@@ -105,6 +105,28 @@ impl Plot {
         );
     }
 
+    /// Filled dots.
+    pub fn dots(&mut self, points: &[[f64; 2]], color: &str, radius: f64) {
+        for p in points {
+            let (x, y) = self.px(*p);
+            let _ = writeln!(
+                self.body,
+                r#"<circle cx="{x:.1}" cy="{y:.1}" r="{radius}" fill="{color}"/>"#
+            );
+        }
+    }
+
+    /// Open rings (markers that leave the point visible).
+    pub fn rings(&mut self, points: &[[f64; 2]], color: &str, radius: f64) {
+        for p in points {
+            let (x, y) = self.px(*p);
+            let _ = writeln!(
+                self.body,
+                r#"<circle cx="{x:.1}" cy="{y:.1}" r="{radius}" fill="none" stroke="{color}" stroke-width="1.5"/>"#
+            );
+        }
+    }
+
     /// Text at a world position.
     pub fn label(&mut self, at: [f64; 2], text: &str, color: &str) {
         let (x, y) = self.px(at);

@@ -1,0 +1,169 @@
+//! `pcaline map LOG`: the line map and the aided trajectory of a log, with
+//! the log's own odometry as the localization source.
+
+use crate::exit::BadInput;
+use crate::log_args::LogArgs;
+use crate::progress;
+use crate::run::Preset;
+use crate::svg::Plot;
+use anyhow::Result;
+use clap::ValueEnum;
+use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
+use pcaline::{LineDetector, Pose2};
+use pcaline_io::{LogRecord, read_log, write_atomic};
+use pcaline_mapping::MapRecord;
+use serde::Serialize;
+use std::ops::ControlFlow;
+use std::path::PathBuf;
+
+/// Which aiding corrects the log's odometry.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum AidingArg {
+    /// None: the map is built with the odometry as it is.
+    None,
+    /// Heading (the paper's eq. 11-14).
+    Heading,
+    /// Heading and translation.
+    Full,
+}
+
+/// Arguments of `pcaline map`.
+#[derive(Debug, clap::Args)]
+pub struct MapArgs {
+    /// Log with scans (CARMEN, ROS 1 bag, ROS 2 bag or folder, MCAP, JSON, CSV).
+    log: PathBuf,
+    #[command(flatten)]
+    input: LogArgs,
+    /// Preset of detector and map.
+    #[arg(long, value_enum, default_value_t = Preset::Default)]
+    config: Preset,
+    /// Aiding.
+    #[arg(long, value_enum, default_value_t = AidingArg::Full)]
+    aiding: AidingArg,
+    /// Output folder.
+    #[arg(long, default_value = "out/map")]
+    out: PathBuf,
+}
+
+#[derive(Debug, Serialize)]
+struct PoseOut {
+    scan: usize,
+    stamp_s: Option<f64>,
+    /// The source pose (odometry), x, y, heading; absent when the log has none.
+    source: Option<[f64; 3]>,
+    /// The corrected pose.
+    aided: [f64; 3],
+    matches: usize,
+}
+
+/// Runs `pcaline map`.
+pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
+    if !args.log.exists() {
+        return Err(BadInput(format!("{}: no such file or folder", args.log.display())).into());
+    }
+    let mapper = args.config.mapper();
+    let aiding_config = match args.aiding {
+        AidingArg::None => AidingConfig::none(),
+        AidingArg::Heading => args.config.heading_aiding(),
+        AidingArg::Full => AidingConfig::full_pose(),
+    };
+    let mut detector = LineDetector::new(mapper.detector)?;
+    let mut aiding = Aiding::new(aiding_config, mapper.map)?;
+    let bar = progress::spinner("scans", quiet);
+    let mut poses: Vec<PoseOut> = Vec::new();
+    let mut lines: Vec<SensorLine> = Vec::new();
+    let mut without_odometry = 0;
+    read_log(&args.log, &args.input.options(), |record| {
+        let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
+        lines.clear();
+        lines.extend(
+            detector
+                .detect(&s.scan)
+                .lines
+                .iter()
+                .map(|l| SensorLine { line: l.line, moments: l.moments }),
+        );
+        let source = s.odometry.or(s.pose);
+        let (pose, report) = match source {
+            Some(p) => aiding.step(&p, &lines),
+            None => {
+                // No motion source: each scan is assumed taken where the
+                // last one was, and the aiding alone moves the estimate.
+                without_odometry += 1;
+                aiding.step_increment(&Pose2::identity(), &lines)
+            }
+        };
+        poses.push(PoseOut {
+            scan: poses.len(),
+            stamp_s: s.scan.stamp_s,
+            source: source.map(|p| [p.x, p.y, p.heading]),
+            aided: [pose.x, pose.y, pose.heading],
+            matches: report.matches,
+        });
+        bar.inc(1);
+        ControlFlow::Continue(())
+    })?;
+    bar.finish_and_clear();
+    if poses.is_empty() {
+        return Err(BadInput(format!("{}: no scans", args.log.display())).into());
+    }
+    std::fs::create_dir_all(&args.out)?;
+    let map_path = args.out.join("map.json");
+    write_atomic(
+        &map_path,
+        serde_json::to_vec_pretty(&MapRecord::from_map(aiding.map()))?.as_slice(),
+    )?;
+    let traj_path = args.out.join("trajectory.json");
+    write_atomic(&traj_path, serde_json::to_vec(&poses)?.as_slice())?;
+    let svg_path = args.out.join("map.svg");
+    write_atomic(&svg_path, draw(&aiding, &poses, &args.log.display().to_string()).as_bytes())?;
+    if !quiet {
+        eprintln!(
+            "{}: {} scans, {} map lines{}",
+            args.log.display(),
+            poses.len(),
+            aiding.map().len(),
+            if without_odometry > 0 {
+                format!(", {without_odometry} scans without odometry (assumed not moving)")
+            } else {
+                String::new()
+            }
+        );
+    }
+    println!("{}\n{}\n{}", map_path.display(), traj_path.display(), svg_path.display());
+    Ok(())
+}
+
+fn draw(aiding: &Aiding, poses: &[PoseOut], name: &str) -> String {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let mut grow = |p: [f64; 2]| {
+        if p[0].is_finite() && p[1].is_finite() {
+            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+        }
+    };
+    for m in aiding.map().lines() {
+        grow([m.line.start.x, m.line.start.y]);
+        grow([m.line.end.x, m.line.end.y]);
+    }
+    for p in poses {
+        grow([p.aided[0], p.aided[1]]);
+        if let Some(s) = p.source {
+            grow([s[0], s[1]]);
+        }
+    }
+    let mut plot = Plot::new(lo, hi, 1000.0);
+    for m in aiding.map().lines() {
+        let l = &m.line;
+        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 1.5);
+    }
+    let source: Vec<[f64; 2]> =
+        poses.iter().filter_map(|p| p.source.map(|s| [s[0], s[1]])).collect();
+    let aided: Vec<[f64; 2]> = poses.iter().map(|p| [p.aided[0], p.aided[1]]).collect();
+    plot.polyline(&source, "#1f77b4", 1.0, true);
+    plot.polyline(&aided, "#9467bd", 1.5, false);
+    plot.legend("line map", "#d62728", false);
+    plot.legend("log odometry", "#1f77b4", false);
+    plot.legend("aided trajectory", "#9467bd", false);
+    plot.finish(&format!("{name}: line map and trajectory"))
+}

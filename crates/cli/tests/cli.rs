@@ -1,0 +1,168 @@
+//! The `pcaline` binary end to end: every command on simulated scenes and on
+//! the real datasets, and bad input (exit code 2, one-line error naming the
+//! file, no partial output).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn pcaline(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pcaline")).args(args).output().expect("pcaline runs")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pcaline-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn data(rel: &str) -> Option<PathBuf> {
+    let base = std::env::var_os("PCALINE_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("../shared/data"));
+    let p = base.join(rel);
+    if p.exists() {
+        return Some(p);
+    }
+    assert!(std::env::var("CI").ok().as_deref() != Some("true"), "missing dataset {}", p.display());
+    None
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn run_on_a_small_generated_scene_writes_every_output() {
+    let scene = tmp("small.toml");
+    let out = pcaline(&[
+        "scene",
+        "generate",
+        "--seed",
+        "3",
+        "--cols",
+        "2",
+        "--rows",
+        "2",
+        "--max-waypoints",
+        "3",
+        "-o",
+        s(&scene),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let check = pcaline(&["scene", "check", s(&scene)]);
+    assert!(check.status.success());
+    let dir = tmp("run");
+    let out = pcaline(&["--quiet", "run", s(&scene), "--out", s(&dir), "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(summary["scans"].as_u64().unwrap() > 10);
+    assert_eq!(summary["modes"].as_array().unwrap().len(), 3);
+    for f in
+        ["scans.json", "map.json", "detections.svg", "map.svg", "heading.svg", "heading-error.svg"]
+    {
+        let p = dir.join(f);
+        assert!(p.metadata().is_ok_and(|m| m.len() > 100), "{f} missing or empty");
+    }
+    let svg = std::fs::read_to_string(dir.join("map.svg")).unwrap();
+    assert!(svg.contains("x (m)") && svg.contains("line map"));
+}
+
+#[test]
+fn every_shipped_scene_checks() {
+    let dir = root().join("sim-scenes");
+    let mut args = vec!["scene".to_string(), "check".to_string()];
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "toml" || x == "json") {
+            args.push(p.display().to_string());
+        }
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_pcaline")).args(&args).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
+}
+
+#[test]
+fn detect_on_every_format_counts_every_scan() {
+    for (rel, scans) in [
+        ("intel/intel.gfs.log", 910),
+        ("mit-csail/mit-csail.clf", 1988),
+        ("utm30lx-ros2", 885),
+        ("ros1/laser_scan_matcher_demo.bag", 360),
+        ("single-scans/laser_scan_2.json", 1),
+    ] {
+        let Some(path) = data(rel) else { continue };
+        let out = pcaline(&["--quiet", "detect", s(&path)]);
+        assert!(out.status.success(), "{rel}: {}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v.as_array().unwrap().len(), scans, "{rel}");
+    }
+    if let Some(path) = data("ros1/laser_scan_matcher_demo.bag") {
+        let csv = tmp("lines.csv");
+        let out = pcaline(&["--quiet", "detect", s(&path), "--csv", "-o", s(&csv)]);
+        assert!(out.status.success());
+        let text = std::fs::read_to_string(&csv).unwrap();
+        assert!(text.starts_with("scan,position,stamp_s,alpha_rad"));
+        assert!(text.lines().count() > 360);
+    }
+}
+
+#[test]
+fn bad_input_is_a_one_line_error_with_exit_code_2_and_no_output() {
+    let bad = tmp("bad.clf");
+    std::fs::write(&bad, "ODOM 1 2 0.1 0 0 0 1 h 1\nFLASER 180 1.0 oops\n").unwrap();
+    let target = tmp("should-not-exist.json");
+    let out = pcaline(&["detect", s(&bad), "-o", s(&target)]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.clf:2:") && err.contains("range 2 is not a number"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!target.exists(), "no partial output");
+
+    let out = pcaline(&["detect", "/no/such/file.bag"]);
+    assert_eq!(out.status.code(), Some(2));
+
+    let mismatched = tmp("mismatch.json");
+    std::fs::write(&mismatched, r#"{"ranges": [1.0, 2.0, 3.0], "bearings": [0.0, 0.1]}"#).unwrap();
+    let out = pcaline(&["detect", s(&mismatched)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("beam count mismatch"));
+
+    let scene = tmp("bad-scene.toml");
+    std::fs::write(&scene, "name = \"x\"\n[[walls]]\npoints = [[0, 0]]\n[trajectory]\nstart = {x = 0, y = 0}\nwaypoints = []\n").unwrap();
+    let out = pcaline(&["run", s(&scene), "--out", s(&tmp("bad-run"))]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("walls[0]"));
+    assert!(!tmp("bad-run").exists());
+}
+
+#[test]
+fn map_and_draw_on_real_data() {
+    if let Some(path) = data("intel/intel.gfs.log") {
+        let dir = tmp("intel-map");
+        let out = pcaline(&["--quiet", "map", s(&path), "--out", s(&dir)]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let traj: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("trajectory.json")).unwrap()).unwrap();
+        assert_eq!(traj.as_array().unwrap().len(), 910);
+    }
+    if let Some(path) = data("utm30lx-ros2") {
+        let svg = tmp("scan.svg");
+        let out = pcaline(&["--quiet", "draw", "scan", s(&path), "--index", "10", "-o", s(&svg)]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(std::fs::read_to_string(&svg).unwrap().contains("level-2 break-points"));
+        let out = pcaline(&["draw", "scan", s(&path), "--index", "100000", "-o", s(&svg)]);
+        assert_eq!(out.status.code(), Some(2));
+    }
+}
+
+#[test]
+fn reproduce_small() {
+    let out = pcaline(&["--quiet", "reproduce", "table2", "--runs", "200", "--json"]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["rows"].as_array().unwrap().len(), 5);
+}
