@@ -1,6 +1,9 @@
 //! Whole-scan detection on simulated 1081-beam scans (office and hall
-//! scenes, UTM-30LX-EW noise) for both presets, and the stages of the
-//! default pipeline: level 1, level 2, and the rest (fit, merge).
+//! scenes, UTM-30LX-EW noise) and on a real 361-beam CARMEN scan, for both
+//! presets, and the stages of the default pipeline: level 1, level 2, and
+//! the rest (fit, merge).
+
+#![allow(clippy::print_stderr)] // the loud report of a missing dataset
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use pcaline::geometry::{BearingTable, ScanPoints};
@@ -20,6 +23,35 @@ fn detection(c: &mut Criterion) {
         ("office", scan_of(include_str!("../sim-scenes/office-clutter.toml"), "office.toml")),
         ("hall", scan_of(include_str!("../sim-scenes/hall-pillars.toml"), "hall.toml")),
     ];
+    // A real 361-beam CARMEN scan (SICK, 0.5°) from the MIT CSAIL log.
+    let data =
+        std::env::var_os("PCALINE_DATA").map(std::path::PathBuf::from).unwrap_or_else(|| {
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")
+        });
+    let mut carmen = None;
+    let log = data.join("mit-csail/mit-csail.clf");
+    if let Ok(reader) = pcaline_io::CarmenReader::open(&log, Default::default()) {
+        carmen = reader.filter_map(Result::ok).find_map(|r| match r {
+            pcaline_io::LogRecord::Scan(s) => Some(s.scan),
+            _ => None,
+        });
+    }
+    match &carmen {
+        Some(scan) => {
+            let mut group = c.benchmark_group("detect_361_beams_carmen");
+            for (preset, config) in [("default", Config::default()), ("paper", Config::paper())] {
+                let mut det = LineDetector::new(config).unwrap();
+                group.bench_function(preset, |b| {
+                    b.iter(|| black_box(det.detect(black_box(scan)).lines.len()))
+                });
+            }
+            group.finish();
+        }
+        None => {
+            eprintln!("!!! {} not found (set PCALINE_DATA): CARMEN bench skipped", log.display())
+        }
+    }
+
     let mut group = c.benchmark_group("detect_1081_beams");
     for (name, scan) in &scans {
         for (preset, config) in [("default", Config::default()), ("paper", Config::paper())] {

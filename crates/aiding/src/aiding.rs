@@ -208,3 +208,100 @@ impl Default for StepReport {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pcaline_fitting::line_from_moments;
+
+    fn wall(a: (f64, f64), b: (f64, f64)) -> SensorLine {
+        let pts: Vec<_> = (0..=40)
+            .map(|i| {
+                let t = i as f64 / 40.0;
+                Point2::new(a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t)
+            })
+            .collect();
+        let moments = Moments::from_points(&pts);
+        SensorLine { line: line_from_moments(&moments, &pts[0], &pts[40]).unwrap(), moments }
+    }
+
+    fn corridor() -> Vec<SensorLine> {
+        vec![wall((-3.0, 1.0), (3.0, 1.0)), wall((-3.0, -1.0), (3.0, -1.0))]
+    }
+
+    fn room() -> Vec<SensorLine> {
+        vec![
+            wall((2.0, -2.0), (2.0, 2.0)),
+            wall((-2.0, 1.5), (2.0, 1.5)),
+            wall((-2.0, -1.5), (2.0, -1.5)),
+        ]
+    }
+
+    fn aiding(config: AidingConfig) -> Aiding {
+        Aiding::new(config, MapConfig::default()).unwrap()
+    }
+
+    #[test]
+    fn no_matches_keeps_the_prediction_and_says_so() {
+        let mut a = aiding(AidingConfig::full_pose());
+        a.step(&Pose2::identity(), &room());
+        let far = vec![wall((40.0, -2.0), (40.0, 2.0))];
+        let (pose, report) = a.step(&Pose2::new(0.1, 0.0, 0.0), &far);
+        assert_eq!(report.fallback, Some(Fallback::NoMatches));
+        assert_eq!(pose, Pose2::new(0.1, 0.0, 0.0));
+        let (pose, report) = a.step(&Pose2::new(0.2, 0.0, 0.0), &[]);
+        assert_eq!(report.fallback, Some(Fallback::NoMatches));
+        assert!(pose.is_finite());
+    }
+
+    #[test]
+    fn one_match_and_parallel_matches_constrain_one_direction() {
+        for lines in [vec![wall((-3.0, 1.0), (3.0, 1.0))], corridor()] {
+            let mut a = aiding(AidingConfig::full_pose());
+            a.step(&Pose2::identity(), &lines);
+            // The source claims a step of 0.1 m along and across the corridor.
+            let (pose, report) = a.step(&Pose2::new(0.1, 0.05, 0.0), &lines);
+            assert_eq!(report.constrained_directions, 1, "{report:?}");
+            assert!(pose.y.abs() < 1e-6, "across the walls the lines pull back: {pose:?}");
+            assert!((pose.x - 0.1).abs() < 1e-6, "along the walls nothing is known: {pose:?}");
+        }
+    }
+
+    #[test]
+    fn a_room_constrains_both_directions() {
+        let mut a = aiding(AidingConfig::full_pose());
+        a.step(&Pose2::identity(), &room());
+        let (pose, report) = a.step(&Pose2::new(0.08, -0.05, 0.02), &room());
+        assert_eq!(report.constrained_directions, 2);
+        assert!(
+            pose.x.abs() < 1e-3 && pose.y.abs() < 1e-3 && pose.heading.abs() < 1e-6,
+            "{pose:?}"
+        );
+    }
+
+    #[test]
+    fn zero_d_rho_does_not_divide_by_zero() {
+        let mut a = aiding(AidingConfig::paper());
+        a.step(&Pose2::identity(), &room());
+        let (pose, report) = a.step(&Pose2::identity(), &room());
+        assert!(pose.is_finite() && report.heading_correction_rad.abs() < 1e-9, "{report:?}");
+    }
+
+    #[test]
+    fn nan_or_huge_sources_never_produce_nan() {
+        for mode in [AidingConfig::paper(), AidingConfig::full_pose(), AidingConfig::none()] {
+            let mut a = aiding(mode);
+            a.step(&Pose2::identity(), &room());
+            let (pose, report) = a.step(&Pose2::new(f64::NAN, 0.0, 0.0), &room());
+            assert_eq!(report.fallback, Some(Fallback::NonFiniteSource));
+            assert_eq!(pose, Pose2::identity());
+            let (pose, report) = a.step_increment(&Pose2::new(0.0, f64::INFINITY, 0.0), &room());
+            assert_eq!(report.fallback, Some(Fallback::NonFiniteSource));
+            assert!(pose.is_finite());
+            let (pose, _) = a.step(&Pose2::new(1e300, -1e300, 1e10), &room());
+            assert!(pose.is_finite(), "{pose:?}");
+            let (pose, _) = a.step(&Pose2::new(1e300, 1e300, 0.0), &room());
+            assert!(pose.is_finite(), "{pose:?}");
+        }
+    }
+}
