@@ -3,12 +3,13 @@
 
 use crate::exit::BadInput;
 use crate::log_args::LogArgs;
+use crate::picture::write_picture;
 use crate::run::Preset;
 use crate::svg::Plot;
 use anyhow::Result;
 use clap::Subcommand;
 use pcaline::LineDetector;
-use pcaline_io::{LogRecord, read_log, write_atomic};
+use pcaline_io::{LogRecord, read_log};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 
@@ -33,7 +34,7 @@ pub struct ScanArgs {
     /// Detector preset.
     #[arg(long, value_enum, default_value_t = Preset::Default)]
     config: Preset,
-    /// Output SVG.
+    /// Output picture: SVG, or PNG when the name ends in `.png`.
     #[arg(short, long)]
     output: PathBuf,
 }
@@ -97,7 +98,7 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
         d.clusters.len(),
         d.lines.len()
     );
-    write_atomic(&args.output, plot.finish(&title).as_bytes())?;
+    write_picture(&args.output, &plot.finish(&title))?;
     if !quiet {
         eprintln!("wrote {}", args.output.display());
     }

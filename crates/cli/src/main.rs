@@ -13,6 +13,7 @@ mod draw;
 mod exit;
 mod log_args;
 mod map_cmd;
+mod picture;
 mod progress;
 mod reproduce;
 mod run;

@@ -3,6 +3,7 @@
 
 use crate::exit::BadInput;
 use crate::log_args::LogArgs;
+use crate::picture::write_svg_and_png;
 use crate::progress;
 use crate::run::Preset;
 use crate::svg::Plot;
@@ -43,6 +44,9 @@ pub struct MapArgs {
     /// Output folder.
     #[arg(long, default_value = "out/map")]
     out: PathBuf,
+    /// Also write the picture as PNG.
+    #[arg(long)]
+    png: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -115,8 +119,12 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     )?;
     let traj_path = args.out.join("trajectory.json");
     write_atomic(&traj_path, serde_json::to_vec(&poses)?.as_slice())?;
-    let svg_path = args.out.join("map.svg");
-    write_atomic(&svg_path, draw(&aiding, &poses, &args.log.display().to_string()).as_bytes())?;
+    let pictures = write_svg_and_png(
+        &args.out,
+        "map",
+        &draw(&aiding, &poses, &args.log.display().to_string()),
+        args.png,
+    )?;
     if !quiet {
         eprintln!(
             "{}: {} scans, {} map lines{}",
@@ -130,7 +138,10 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             }
         );
     }
-    println!("{}\n{}\n{}", map_path.display(), traj_path.display(), svg_path.display());
+    println!("{}\n{}", map_path.display(), traj_path.display());
+    for p in pictures {
+        println!("{}", p.display());
+    }
     Ok(())
 }
 

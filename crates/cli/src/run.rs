@@ -5,6 +5,7 @@
 //! pictures and JSON go to the output folder.
 
 use crate::exit::BadInput;
+use crate::picture::write_svg_and_png;
 use crate::progress;
 use crate::scene_cmd::draw_scene;
 use crate::svg::Plot;
@@ -40,6 +41,9 @@ pub struct RunArgs {
     /// Print the summary as JSON on stdout instead of a table.
     #[arg(long)]
     json: bool,
+    /// Also write each picture as PNG.
+    #[arg(long)]
+    png: bool,
 }
 
 /// Presets.
@@ -231,10 +235,17 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     };
     write("scans.json", &serde_json::to_vec(&records)?)?;
     write("map.json", &serde_json::to_vec_pretty(&MapRecord::from_map(loops[2].map()))?)?;
-    write("detections.svg", draw_detections(&scene, &sim, &drawn).as_bytes())?;
-    write("map.svg", draw_map(&scene, &sim, &loops[2], &estimates).as_bytes())?;
-    write("heading.svg", draw_heading(&sim, &estimates).as_bytes())?;
-    write("heading-error.svg", draw_heading_error(&sim, &estimates).as_bytes())?;
+    let pictures = [
+        ("detections", draw_detections(&scene, &sim, &drawn)),
+        ("map", draw_map(&scene, &sim, &loops[2], &estimates)),
+        ("heading", draw_heading(&sim, &estimates)),
+        ("heading-error", draw_heading_error(&sim, &estimates)),
+    ];
+    for (name, svg) in &pictures {
+        for p in write_svg_and_png(&args.out, name, svg, args.png)? {
+            outputs.push(p.display().to_string());
+        }
+    }
 
     residuals.sort_by(f64::total_cmp);
     let scans = sim.len();

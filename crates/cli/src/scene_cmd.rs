@@ -4,7 +4,7 @@ use crate::exit::BadInput;
 use crate::svg::Plot;
 use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
-use pcaline_io::{read_scene, write_atomic, write_scene};
+use pcaline_io::{read_scene, write_scene};
 use pcaline_sim::{MazeConfig, Scene, WallStyle, generate_maze};
 use std::path::PathBuf;
 
@@ -23,7 +23,7 @@ pub enum SceneCommand {
     Draw {
         /// Scene file.
         file: PathBuf,
-        /// Output SVG.
+        /// Output picture: SVG, or PNG when the name ends in `.png`.
         #[arg(short, long)]
         output: PathBuf,
     },
@@ -146,7 +146,7 @@ pub fn run(cmd: &SceneCommand, quiet: bool) -> Result<()> {
         SceneCommand::Draw { file, output } => {
             let scene = read_scene(file)?;
             let svg = draw_scene(&scene, None).finish(&format!("Scene \"{}\"", scene.name));
-            write_atomic(output, svg.as_bytes())
+            crate::picture::write_picture(output, &svg)
                 .with_context(|| format!("writing {}", output.display()))?;
             Ok(())
         }

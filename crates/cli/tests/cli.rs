@@ -154,6 +154,10 @@ fn map_and_draw_on_real_data() {
         let out = pcaline(&["--quiet", "draw", "scan", s(&path), "--index", "10", "-o", s(&svg)]);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         assert!(std::fs::read_to_string(&svg).unwrap().contains("level-2 break-points"));
+        let png = tmp("scan.png");
+        let out = pcaline(&["--quiet", "draw", "scan", s(&path), "--index", "10", "-o", s(&png)]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
         let out = pcaline(&["draw", "scan", s(&path), "--index", "100000", "-o", s(&svg)]);
         assert_eq!(out.status.code(), Some(2));
     }

@@ -166,6 +166,33 @@ mod tests {
     }
 
     #[test]
+    fn a_wide_gap_of_invalid_beams_breaks_the_cluster() {
+        // A straight wall at 2 m with 30 missing beams (7.5°) in the middle.
+        let inc = 0.25f64.to_radians();
+        let ranges: Vec<f32> = (0..200)
+            .map(|i| {
+                let a = -25f64.to_radians() + i as f64 * inc;
+                if (80..110).contains(&i) { f32::NAN } else { (2.0 / a.cos()) as f32 }
+            })
+            .collect();
+        let scan = Scan::new(-25f32.to_radians(), inc as f32, 0.1, 30.0, ranges);
+        let p = points_of(&scan);
+        let (mut b, mut c) = (vec![], vec![]);
+        level1_clusters(&p, &BreakRule::adaptive_utm30lx(), 5, &mut b, &mut c);
+        assert_eq!(c.len(), 2, "{c:?}");
+        // A narrow gap (3 beams) does not break it.
+        let ranges: Vec<f32> = (0..200)
+            .map(|i| {
+                let a = -25f64.to_radians() + i as f64 * inc;
+                if (80..83).contains(&i) { f32::NAN } else { (2.0 / a.cos()) as f32 }
+            })
+            .collect();
+        let p = points_of(&Scan::new(-25f32.to_radians(), inc as f32, 0.1, 30.0, ranges));
+        level1_clusters(&p, &BreakRule::adaptive_utm30lx(), 5, &mut b, &mut c);
+        assert_eq!(c.len(), 1, "{c:?}");
+    }
+
+    #[test]
     fn adaptive_threshold_keeps_far_grazing_wall_together() {
         // A wall seen at 25 m: spacing 0.25° * 25 m = 11 cm, grazing makes it larger.
         let rule = BreakRule::adaptive_utm30lx();

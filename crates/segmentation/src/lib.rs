@@ -48,8 +48,10 @@ pub enum BreakRule {
     /// spacing of two points on a wall seen at incidence `lambda` or steeper,
     /// `r sin(dtheta) / sin(lambda - dtheta)`, plus `sigma_factor` range sigmas.
     /// It follows range and beam spacing: a fixed threshold over-segments far
-    /// walls and under-segments near ones. `r` is the nearer range; gaps of
-    /// invalid beams enlarge `dtheta`, capped at `lambda / 2`.
+    /// walls and under-segments near ones. `r` is the nearer range; a gap of
+    /// invalid beams enlarges `dtheta`, and a gap wider than `lambda / 2`
+    /// always breaks the cluster (bridging it would draw lines across
+    /// windows, doorways seen edge-on and dropouts).
     Adaptive {
         /// The shallowest incidence angle of a wall still kept whole, radians.
         lambda_rad: f64,
@@ -90,8 +92,10 @@ impl BreakRule {
         match *self {
             BreakRule::Fixed { .. } => 0.0,
             BreakRule::Adaptive { lambda_rad, .. } => {
-                let dphi = delta_angle_rad.min(0.5 * lambda_rad);
-                dphi.sin() / (lambda_rad - dphi).sin()
+                if delta_angle_rad.is_nan() || delta_angle_rad > 0.5 * lambda_rad {
+                    return -f64::INFINITY; // a wide gap: always a break
+                }
+                delta_angle_rad.sin() / (lambda_rad - delta_angle_rad).sin()
             }
         }
     }
@@ -102,6 +106,9 @@ impl BreakRule {
         match *self {
             BreakRule::Fixed { dth_m } => dth_m,
             BreakRule::Adaptive { sigma_factor, noise, .. } => {
+                if factor == f64::NEG_INFINITY {
+                    return 0.0;
+                }
                 r_i.min(r_j) * factor + sigma_factor * noise.sigma_at(r_i.max(r_j))
             }
         }
