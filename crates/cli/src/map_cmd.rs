@@ -11,8 +11,7 @@ use anyhow::Result;
 use clap::ValueEnum;
 use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
 use pcaline::{LineDetector, Pose2};
-use pcaline_io::{LogRecord, read_log, write_atomic};
-use pcaline_mapping::MapRecord;
+use pcaline_io::{LogRecord, read_log, write_json, write_map_csv, write_map_json};
 use serde::Serialize;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -113,12 +112,11 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     }
     std::fs::create_dir_all(&args.out)?;
     let map_path = args.out.join("map.json");
-    write_atomic(
-        &map_path,
-        serde_json::to_vec_pretty(&MapRecord::from_map(aiding.map()))?.as_slice(),
-    )?;
+    write_map_json(&map_path, aiding.map())?;
+    let map_csv = args.out.join("map.csv");
+    write_map_csv(&map_csv, aiding.map())?;
     let traj_path = args.out.join("trajectory.json");
-    write_atomic(&traj_path, serde_json::to_vec(&poses)?.as_slice())?;
+    write_json(&traj_path, &poses)?;
     let pictures = write_svg_and_png(
         &args.out,
         "map",
@@ -138,7 +136,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             }
         );
     }
-    println!("{}\n{}", map_path.display(), traj_path.display());
+    println!("{}\n{}\n{}", map_path.display(), map_csv.display(), traj_path.display());
     for p in pictures {
         println!("{}", p.display());
     }

@@ -13,8 +13,7 @@ use anyhow::{Context, Result};
 use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
 use pcaline::{LineDetector, LineSegment, MapperConfig, Pose2};
 use pcaline_eval::{MapQuality, TrajectoryErrors, VisibleWalls, map_quality, trajectory_errors};
-use pcaline_io::{parse_scene, read_scene, write_atomic};
-use pcaline_mapping::MapRecord;
+use pcaline_io::{parse_scene, read_scene, write_json, write_map_csv, write_map_json};
 use pcaline_sim::{Scene, Simulator};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -227,14 +226,13 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating output folder {}", args.out.display()))?;
     let mut outputs = Vec::new();
-    let mut write = |name: &str, bytes: &[u8]| -> Result<()> {
-        let path = args.out.join(name);
-        write_atomic(&path, bytes)?;
-        outputs.push(path.display().to_string());
-        Ok(())
-    };
-    write("scans.json", &serde_json::to_vec(&records)?)?;
-    write("map.json", &serde_json::to_vec_pretty(&MapRecord::from_map(loops[2].map()))?)?;
+    let scans_path = args.out.join("scans.json");
+    write_json(&scans_path, &records)?;
+    outputs.push(scans_path.display().to_string());
+    let (map_json, map_csv) = (args.out.join("map.json"), args.out.join("map.csv"));
+    write_map_json(&map_json, loops[2].map())?;
+    write_map_csv(&map_csv, loops[2].map())?;
+    outputs.extend([map_json.display().to_string(), map_csv.display().to_string()]);
     let pictures = [
         ("detections", draw_detections(&scene, &sim, &drawn)),
         ("map", draw_map(&scene, &sim, &loops[2], &estimates)),

@@ -15,6 +15,7 @@ mod atomic;
 mod carmen;
 mod error;
 mod laserscan_codec;
+mod lines_file;
 mod log;
 mod record;
 mod relations;
@@ -26,6 +27,10 @@ pub use atomic::{write_atomic, write_atomic_with};
 pub use carmen::{CarmenOptions, CarmenReader};
 pub use error::IoError;
 pub use laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1, encode_laserscan_cdr};
+pub use lines_file::{
+    LineRecord, ScanLines, lines_to_csv, lines_to_json, read_map, write_json, write_map_csv,
+    write_map_json,
+};
 pub use log::{LogFormat, LogOptions, read_log};
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
 pub use relations::{Relation, read_relations};

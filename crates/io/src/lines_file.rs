@@ -1,0 +1,180 @@
+//! Writers (and a reader) for detected lines and line maps, as JSON or CSV.
+
+use crate::{IoError, write_atomic};
+use pcaline_geometry::LineSegment;
+use pcaline_mapping::{LineMap, MapRecord};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The lines of one scan, in the sensor frame.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScanLines {
+    /// Index of the scan in its file, from 0.
+    pub scan: usize,
+    /// Line or message number in the file.
+    pub position: usize,
+    /// Time, seconds.
+    pub stamp_s: Option<f64>,
+    /// The lines.
+    pub lines: Vec<LineRecord>,
+}
+
+/// One line, for output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LineRecord {
+    /// Normal angle, radians.
+    pub alpha_rad: f64,
+    /// Distance from the origin, metres.
+    pub d_m: f64,
+    /// First endpoint.
+    pub start: [f64; 2],
+    /// Last endpoint.
+    pub end: [f64; 2],
+    /// Length, metres.
+    pub length_m: f64,
+    /// Points fitted.
+    pub n_points: usize,
+    /// Residual standard deviation, metres.
+    pub residual_std_m: f64,
+    /// First beam, when known.
+    pub first_beam: Option<u32>,
+    /// Last beam, when known.
+    pub last_beam: Option<u32>,
+}
+
+impl LineRecord {
+    /// The record of a line, with its beam range when known.
+    pub fn new(l: &LineSegment, beams: Option<(u32, u32)>) -> Self {
+        LineRecord {
+            alpha_rad: l.alpha,
+            d_m: l.d,
+            start: [l.start.x, l.start.y],
+            end: [l.end.x, l.end.y],
+            length_m: l.length(),
+            n_points: l.n_points,
+            residual_std_m: l.residual_std,
+            first_beam: beams.map(|b| b.0),
+            last_beam: beams.map(|b| b.1),
+        }
+    }
+}
+
+/// Writes any serialisable value as compact JSON, atomically.
+pub fn write_json<T: Serialize + ?Sized>(path: &Path, value: &T) -> Result<(), IoError> {
+    let bytes = serde_json::to_vec(value)
+        .map_err(|e| IoError::parse(path, None, format!("cannot encode: {e}")))?;
+    write_atomic(path, &bytes)
+}
+
+/// Lines of many scans as pretty JSON.
+pub fn lines_to_json(scans: &[ScanLines]) -> String {
+    serde_json::to_string_pretty(scans).unwrap_or_else(|_| "[]".into()) + "\n"
+}
+
+/// Lines of many scans as CSV, one row per line.
+pub fn lines_to_csv(scans: &[ScanLines]) -> String {
+    let mut s = String::from(
+        "scan,position,stamp_s,alpha_rad,d_m,start_x,start_y,end_x,end_y,length_m,n_points,residual_std_m,first_beam,last_beam\n",
+    );
+    let opt = |v: Option<u32>| v.map(|b| b.to_string()).unwrap_or_default();
+    for scan in scans {
+        for l in &scan.lines {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                scan.scan,
+                scan.position,
+                scan.stamp_s.map(|t| t.to_string()).unwrap_or_default(),
+                l.alpha_rad,
+                l.d_m,
+                l.start[0],
+                l.start[1],
+                l.end[0],
+                l.end[1],
+                l.length_m,
+                l.n_points,
+                l.residual_std_m,
+                opt(l.first_beam),
+                opt(l.last_beam)
+            );
+        }
+    }
+    s
+}
+
+/// Writes a map as JSON (the [`MapRecord`] form, loadable with [`read_map`]).
+pub fn write_map_json(path: &Path, map: &LineMap) -> Result<(), IoError> {
+    let text = serde_json::to_string_pretty(&MapRecord::from_map(map))
+        .map_err(|e| IoError::parse(path, None, format!("cannot encode the map: {e}")))?;
+    write_atomic(path, text.as_bytes())
+}
+
+/// Writes a map as CSV, one row per map line.
+pub fn write_map_csv(path: &Path, map: &LineMap) -> Result<(), IoError> {
+    let mut s = String::from(
+        "id,alpha_rad,d_m,start_x,start_y,end_x,end_y,length_m,n_points,observations,residual_std_m\n",
+    );
+    for m in map.lines() {
+        let l = &m.line;
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{}",
+            m.id.0,
+            l.alpha,
+            l.d,
+            l.start.x,
+            l.start.y,
+            l.end.x,
+            l.end.y,
+            l.length(),
+            l.n_points,
+            m.observations,
+            l.residual_std
+        );
+    }
+    write_atomic(path, s.as_bytes())
+}
+
+/// Reads a map written by [`write_map_json`].
+pub fn read_map(path: &Path) -> Result<LineMap, IoError> {
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
+    let record: MapRecord = serde_json::from_str(&text)
+        .map_err(|e| IoError::parse(path, Some(e.line()), e.to_string()))?;
+    record.to_map().map_err(|e| IoError::Invalid {
+        path: path.to_path_buf(),
+        item: "config".into(),
+        message: e.to_string(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn map_round_trip_and_csv() {
+        let dir = std::env::temp_dir().join(format!("pcaline-map-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut map = LineMap::new(pcaline_mapping::MapConfig::default()).unwrap();
+        let line = LineSegment::through(
+            pcaline_geometry::Point2::new(3.0, 0.5),
+            pcaline_geometry::Vector2::new(0.0, 1.0),
+            pcaline_geometry::Point2::new(3.0, 0.0),
+            pcaline_geometry::Point2::new(3.0, 1.0),
+        );
+        let pts: Vec<_> =
+            (0..11).map(|i| pcaline_geometry::Point2::new(3.0, i as f64 * 0.1)).collect();
+        let moments = pcaline_fitting::Moments::from_points(&pts);
+        map.insert(&line, &moments);
+        write_map_json(&dir.join("m.json"), &map).unwrap();
+        let back = read_map(&dir.join("m.json")).unwrap();
+        assert_eq!(back.len(), 1);
+        write_map_csv(&dir.join("m.csv"), &map).unwrap();
+        let csv = std::fs::read_to_string(dir.join("m.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 2);
+        std::fs::write(dir.join("bad.json"), "{\n\"config\": 1}").unwrap();
+        let e = read_map(&dir.join("bad.json")).unwrap_err().to_string();
+        assert!(e.contains("bad.json:2"), "{e}");
+    }
+}
