@@ -32,6 +32,35 @@ impl Config {
         }
     }
 
+    /// The established split-and-merge extractors, as a baseline: a fixed
+    /// 0.15 m break-point distance, a recursive split at a fixed 5 cm from
+    /// the chord, `ETh` 50, and a merge of neighbours within 2° (thresholds
+    /// in metres and degrees, not following the noise).
+    pub fn split_and_merge() -> Self {
+        use pcaline_fitting::MergeRule;
+        use pcaline_segmentation::{BreakRule, Level2Rule};
+        Config {
+            segmentation: SegmentationConfig {
+                level1: BreakRule::Fixed { dth_m: 0.15 },
+                min_cluster_points: 5,
+                level2: Level2Rule::SplitAtFarthest {
+                    sigma_factor: 1.0,
+                    min_distance_m: 0.05,
+                    noise: RangeNoise::constant(0.0),
+                },
+            },
+            fitting: FitConfig {
+                eth: 50.0,
+                min_points: 5,
+                merge: MergeRule::Angles { alpha_t_rad: 2f64.to_radians() },
+                corner_window: 0,
+                residual_test: None,
+                min_line_points: 0,
+                min_line_length_m: 0.0,
+            },
+        }
+    }
+
     /// Checks every value; an invalid one is a [`ConfigError`] naming the field.
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.segmentation.validate()?;

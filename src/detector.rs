@@ -196,7 +196,10 @@ impl LineDetector {
         for piece in &self.pieces {
             let first = self.points.xy[piece.first];
             let last = self.points.xy[piece.last];
-            if let Some(line) = line_from_moments(&piece.moments, &first, &last) {
+            if let Some(line) = line_from_moments(&piece.moments, &first, &last)
+                && line.n_points >= fit.min_line_points
+                && line.length() >= fit.min_line_length_m
+            {
                 self.lines.push(DetectedLine {
                     line,
                     moments: piece.moments,

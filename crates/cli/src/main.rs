@@ -10,6 +10,7 @@
 
 mod detect;
 mod draw;
+mod eval_cmd;
 mod exit;
 mod log_args;
 mod map_cmd;
@@ -62,6 +63,9 @@ enum Command {
     /// Generate, check or draw scene files.
     #[command(subcommand)]
     Scene(scene_cmd::SceneCommand),
+    /// Evaluate line detection against ground truth on the shipped scenes
+    /// (recall, false positives, fragmentation, errors) at several noise levels.
+    Eval(eval_cmd::EvalArgs),
     /// Reproduce the paper's Tables 1-3 and its ETh experiment, with the
     /// paper's values beside ours.
     Reproduce(reproduce::ReproduceArgs),
@@ -76,6 +80,7 @@ fn main() -> ExitCode {
         Command::Map(args) => map_cmd::run(&args, cli.quiet),
         Command::Draw(cmd) => draw::run(&cmd, cli.quiet),
         Command::Reproduce(args) => reproduce::run(&args, cli.quiet),
+        Command::Eval(args) => eval_cmd::run(&args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -12,10 +12,14 @@
 //! assert!((e.heading_max_rad - 0.1).abs() < 1e-12);
 //! ```
 
+mod detection;
+mod detection_run;
 mod map_quality;
 mod reproduce;
 mod trajectory;
 
+pub use detection::{DetectionCriteria, DetectionScore, TrueWall, matches, true_walls};
+pub use detection_run::{DetectFn, DetectionEval, DetectorResult, evaluate_detectors};
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
 pub use reproduce::{
     ETH_EXPERIMENTS, EthExperiment, EthResult, FitRow, FitRowResult, TABLE1, TABLE2, TABLE3,

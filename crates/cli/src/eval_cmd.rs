@@ -1,0 +1,148 @@
+//! `pcaline eval`: line detection against ground truth on the shipped scenes
+//! (design, section 5), for the paper preset, the default and the
+//! split-and-merge baseline.
+
+use crate::exit::BadInput;
+use anyhow::Result;
+use pcaline::{Config, LineDetector, LineSegment, RangeNoise, Scan};
+use pcaline_eval::{DetectFn, DetectionCriteria, DetectionEval, evaluate_detectors};
+use pcaline_io::parse_scene;
+use serde::Serialize;
+use std::path::Path;
+
+/// The scenes, embedded.
+const SCENES: [(&str, &str); 4] = [
+    ("corridor-doors", include_str!("../../../sim-scenes/corridor-doors.toml")),
+    ("office-clutter", include_str!("../../../sim-scenes/office-clutter.toml")),
+    ("hall-pillars", include_str!("../../../sim-scenes/hall-pillars.toml")),
+    ("paper-maze", include_str!("../../../sim-scenes/paper-maze.toml")),
+];
+
+/// Arguments of `pcaline eval`.
+#[derive(Debug, clap::Args)]
+pub struct EvalArgs {
+    /// Range noise of the simulated sensor, millimetres (repeat for several).
+    #[arg(long = "sigma-mm", default_values_t = [10.0, 30.0])]
+    sigma_mm: Vec<f64>,
+    /// Seeds per scene.
+    #[arg(long, default_value_t = 3)]
+    seeds: u64,
+    /// Scans per scene and seed.
+    #[arg(long, default_value_t = 60)]
+    scans: usize,
+    /// Print JSON instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct Row {
+    sigma_mm: f64,
+    detector: &'static str,
+    scans: usize,
+    true_walls: usize,
+    recall: f64,
+    false_positive_fraction: f64,
+    fragmentation: f64,
+    alpha_median_deg: f64,
+    alpha_rms_deg: f64,
+    d_median_mm: f64,
+    d_rms_mm: f64,
+    time_per_scan_us: f64,
+}
+
+/// Runs `pcaline eval`.
+pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
+    if args.sigma_mm.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
+        return Err(BadInput("--sigma-mm must be finite and >= 0".into()).into());
+    }
+    let scenes = SCENES
+        .iter()
+        .map(|(name, text)| parse_scene(Path::new(&format!("{name}.toml")), text))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut rows = Vec::new();
+    for &sigma_mm in &args.sigma_mm {
+        let sigma = sigma_mm / 1000.0;
+        let presets: [(&'static str, Config); 4] = [
+            ("paper", Config::paper()),
+            ("split-and-merge", Config::split_and_merge()),
+            ("default (UTM model)", Config::default()),
+            ("default (told sigma)", Config::noise_aware(RangeNoise::constant(sigma.max(1e-3)))),
+        ];
+        let mut detectors: Vec<LineDetector> =
+            presets.iter().map(|(_, c)| LineDetector::new(*c)).collect::<Result<_, _>>()?;
+        let mut closures: Vec<Box<DetectFn<'_>>> = detectors
+            .iter_mut()
+            .map(|d| {
+                Box::new(move |s: &Scan| -> Vec<LineSegment> {
+                    d.detect(s).lines.iter().map(|l| l.line).collect()
+                }) as Box<DetectFn<'_>>
+            })
+            .collect();
+        let mut refs: Vec<&mut DetectFn<'_>> = closures.iter_mut().map(|c| c.as_mut()).collect();
+        let eval = DetectionEval {
+            sigma_m: sigma,
+            seeds: args.seeds,
+            scans: args.scans,
+            criteria: DetectionCriteria::default(),
+        };
+        let results =
+            evaluate_detectors(&scenes, &eval, &mut refs).map_err(|e| BadInput(e.to_string()))?;
+        for ((name, _), r) in presets.iter().zip(results) {
+            let s = &r.score;
+            let (am, ar) = s.alpha_error();
+            let (dm, dr) = s.d_error();
+            rows.push(Row {
+                sigma_mm,
+                detector: name,
+                scans: s.scans,
+                true_walls: s.true_walls,
+                recall: s.recall(),
+                false_positive_fraction: s.false_positive_fraction(),
+                fragmentation: s.fragmentation(),
+                alpha_median_deg: am.to_degrees(),
+                alpha_rms_deg: ar.to_degrees(),
+                d_median_mm: dm * 1e3,
+                d_rms_mm: dr * 1e3,
+                time_per_scan_us: r.time_per_scan_us,
+            });
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+        return Ok(());
+    }
+    println!(
+        "{:>6}  {:<22} {:>6} {:>6} {:>7} {:>6} {:>6} {:>9} {:>9} {:>8} {:>8} {:>9}",
+        "sigma",
+        "detector",
+        "scans",
+        "walls",
+        "recall",
+        "FP",
+        "frag",
+        "|da| med",
+        "da rms",
+        "|dd| med",
+        "dd rms",
+        "us/scan"
+    );
+    for r in &rows {
+        println!(
+            "{:>4}mm  {:<22} {:>6} {:>6} {:>7.3} {:>6.3} {:>6.2} {:>8.3}° {:>8.3}° {:>6.1}mm {:>6.1}mm {:>9.1}",
+            r.sigma_mm,
+            r.detector,
+            r.scans,
+            r.true_walls,
+            r.recall,
+            r.false_positive_fraction,
+            r.fragmentation,
+            r.alpha_median_deg,
+            r.alpha_rms_deg,
+            r.d_median_mm,
+            r.d_rms_mm,
+            r.time_per_scan_us
+        );
+    }
+    Ok(())
+}
