@@ -33,6 +33,13 @@ pub struct EvalArgs {
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
+    /// Evaluate on real data instead: raw and aided odometry of the MIT
+    /// CSAIL log against its corrected poses.
+    #[arg(long)]
+    real: bool,
+    /// The datasets folder (for --real); `$PCALINE_DATA` or `../shared/data`.
+    #[arg(long)]
+    data: Option<std::path::PathBuf>,
 }
 
 #[derive(Debug, Serialize)]
@@ -53,6 +60,26 @@ struct Row {
 
 /// Runs `pcaline eval`.
 pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
+    if args.real {
+        let data = args
+            .data
+            .clone()
+            .or_else(|| std::env::var_os("PCALINE_DATA").map(Into::into))
+            .unwrap_or_else(|| "../shared/data".into());
+        let (pairs, rows) = crate::eval_real::csail(&data)?;
+        println!("MIT CSAIL: {pairs} scans with corrected poses; estimates aligned at the first");
+        println!(
+            "{:<18} {:>12} {:>12} {:>10} {:>10}",
+            "trajectory", "heading rms", "heading max", "pos rms", "pos final"
+        );
+        for r in rows {
+            println!(
+                "{:<18} {:>10.2} ° {:>10.2} ° {:>8.2} m {:>8.2} m",
+                r.name, r.heading_rms_deg, r.heading_max_deg, r.position_rms_m, r.position_final_m
+            );
+        }
+        return Ok(());
+    }
     if args.sigma_mm.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
         return Err(BadInput("--sigma-mm must be finite and >= 0".into()).into());
     }

@@ -11,6 +11,7 @@
 mod detect;
 mod draw;
 mod eval_cmd;
+mod eval_real;
 mod exit;
 mod log_args;
 mod map_cmd;

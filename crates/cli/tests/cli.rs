@@ -170,3 +170,14 @@ fn reproduce_small() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["rows"].as_array().unwrap().len(), 5);
 }
+
+#[test]
+fn real_data_eval_reproduces_the_raw_drift() {
+    let Some(data) = data("mit-csail").map(|p| p.parent().unwrap().to_path_buf()) else { return };
+    let out = pcaline(&["eval", "--real", "--data", s(&data)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let raw = text.lines().find(|l| l.starts_with("raw odometry")).unwrap();
+    let max: f64 = raw.split_whitespace().nth(4).unwrap().parse().unwrap();
+    assert!((max - 84.0).abs() < 1.0, "raw heading max {max}° (the dataset: 84°)");
+}

@@ -25,4 +25,4 @@ pub use reproduce::{
     ETH_EXPERIMENTS, EthExperiment, EthResult, FitRow, FitRowResult, TABLE1, TABLE2, TABLE3,
     dataset, run_eth, run_fit_row,
 };
-pub use trajectory::{TrajectoryErrors, trajectory_errors};
+pub use trajectory::{TrajectoryErrors, aligned_trajectory_errors, trajectory_errors};

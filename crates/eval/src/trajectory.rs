@@ -39,3 +39,16 @@ pub fn trajectory_errors(estimate: &[Pose2], truth: &[Pose2]) -> Option<Trajecto
         position_final_m: last,
     })
 }
+
+/// Errors of `estimate` against `reference` after aligning the estimate's
+/// first pose onto the reference's (the two live in different world frames:
+/// raw odometry and a SLAM solution).
+pub fn aligned_trajectory_errors(
+    estimate: &[Pose2],
+    reference: &[Pose2],
+) -> Option<TrajectoryErrors> {
+    let (e0, r0) = (estimate.first()?, reference.first()?);
+    let reference_from_estimate = r0.compose(&e0.inverse());
+    let aligned: Vec<Pose2> = estimate.iter().map(|p| reference_from_estimate.compose(p)).collect();
+    trajectory_errors(&aligned, reference)
+}

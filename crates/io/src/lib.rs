@@ -33,7 +33,7 @@ pub use lines_file::{
 };
 pub use log::{LogFormat, LogOptions, read_log};
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
-pub use relations::{Relation, read_relations};
+pub use relations::{Relation, ScanPair, read_relations, read_scan_pairs};
 pub use ros::{read_mcap, read_ros1_bag, read_ros2_bag};
 pub use scan_text::{ScanJson, read_scan_csv, read_scan_json, scans_to_csv};
 pub use scene_file::{parse_scene, read_scene, write_scene};
