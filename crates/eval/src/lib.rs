@@ -14,12 +14,14 @@
 
 mod detection;
 mod detection_run;
+mod fit_accuracy;
 mod map_quality;
 mod reproduce;
 mod trajectory;
 
 pub use detection::{DetectionCriteria, DetectionScore, TrueWall, matches, true_walls};
 pub use detection_run::{DetectFn, DetectionEval, DetectorResult, evaluate_detectors};
+pub use fit_accuracy::{FitAccuracy, fit_accuracy};
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
 pub use reproduce::{
     ETH_EXPERIMENTS, EthExperiment, EthResult, FitRow, FitRowResult, TABLE1, TABLE2, TABLE3,
