@@ -19,12 +19,8 @@ fn maze_lines() -> (Vec<(Pose2, Vec<SensorLine>)>, LineMap) {
     let mut map = LineMap::new(MapConfig::default()).unwrap();
     let mut scans = Vec::new();
     for frame in sim.frames().take(200) {
-        let lines: Vec<SensorLine> = detector
-            .detect(&frame.scan)
-            .lines
-            .iter()
-            .map(|l| SensorLine { line: l.line, moments: l.moments })
-            .collect();
+        let lines: Vec<SensorLine> =
+            detector.detect(&frame.scan).lines.iter().map(SensorLine::from).collect();
         for l in &lines {
             map.insert(
                 &l.line.transformed(&frame.true_pose),

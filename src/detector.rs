@@ -29,6 +29,13 @@ pub struct DetectedLine {
     pub last_beam: u32,
 }
 
+impl From<&DetectedLine> for pcaline_aiding::SensorLine {
+    /// The line and its moments, as the aiding takes them.
+    fn from(l: &DetectedLine) -> Self {
+        pcaline_aiding::SensorLine { line: l.line, moments: l.moments }
+    }
+}
+
 impl DetectedLine {
     /// Indices of the line's points in [`Detection::points`], in scan order
     /// (wrapping for a line across the seam of a closed scan). Includes points

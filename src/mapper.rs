@@ -99,9 +99,7 @@ impl Mapper {
     fn detect(&mut self, scan: &Scan) {
         self.lines.clear();
         let detection = self.detector.detect(scan);
-        self.lines.extend(
-            detection.lines.iter().map(|l| SensorLine { line: l.line, moments: l.moments }),
-        );
+        self.lines.extend(detection.lines.iter().map(SensorLine::from));
     }
 
     /// The map built so far.

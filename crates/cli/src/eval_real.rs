@@ -42,13 +42,7 @@ pub fn csail(data: &Path) -> Result<(usize, Vec<RealRow>)> {
         let LogRecord::Scan(s) = record? else { continue };
         let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
         lines.clear();
-        lines.extend(
-            detector
-                .detect(&s.scan)
-                .lines
-                .iter()
-                .map(|l| SensorLine { line: l.line, moments: l.moments }),
-        );
+        lines.extend(detector.detect(&s.scan).lines.iter().map(SensorLine::from));
         for (aiding, out) in loops.iter_mut().zip(poses.iter_mut()) {
             out.push(aiding.step(&source, &lines).0);
         }

@@ -79,13 +79,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     read_log(&args.log, &args.input.options(), |record| {
         let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
         lines.clear();
-        lines.extend(
-            detector
-                .detect(&s.scan)
-                .lines
-                .iter()
-                .map(|l| SensorLine { line: l.line, moments: l.moments }),
-        );
+        lines.extend(detector.detect(&s.scan).lines.iter().map(SensorLine::from));
         let source = s.odometry.or(s.pose);
         let (pose, report) = match source {
             Some(p) => aiding.step(&p, &lines),

@@ -179,9 +179,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         let detection = detector.detect(&frame.scan);
         detect_time += t0.elapsed().as_secs_f64();
         sensor_lines.clear();
-        sensor_lines.extend(
-            detection.lines.iter().map(|l| SensorLine { line: l.line, moments: l.moments }),
-        );
+        sensor_lines.extend(detection.lines.iter().map(SensorLine::from));
         line_count += sensor_lines.len();
         residuals.extend(sensor_lines.iter().map(|l| l.line.residual_std));
         if frame.index % 20 == 0 {
