@@ -55,18 +55,24 @@ fn paper_heading_aiding_bounds_a_pure_heading_bias() {
     let mut scene = maze();
     scene.odometry = Default::default();
     scene.odometry.heading_rate_bias_deg_s = 0.5;
-    let r = run(&scene, 1, heading_aiding());
-    assert!(r.duration_s >= 60.0);
-    assert!(
-        r.aided.heading_rms_rad < 1f64.to_radians(),
-        "aided heading rms {:.2}°",
-        r.aided.heading_rms_rad.to_degrees()
-    );
-    assert!(
-        r.unaided.heading_rms_rad > 10f64.to_radians(),
-        "unaided {:.2}°",
-        r.unaided.heading_rms_rad.to_degrees()
-    );
+    // Eq. 11-14 exactly (eq. 13's 1/d_rho² weights), and with inverse-variance
+    // weights, both on the default detector and map.
+    let exact = MapperConfig { aiding: AidingConfig::paper(), ..MapperConfig::default() };
+    for config in [exact, heading_aiding()] {
+        let r = run(&scene, 1, config);
+        assert!(r.duration_s >= 60.0);
+        assert!(
+            r.aided.heading_rms_rad < 1f64.to_radians(),
+            "aided heading rms {:.2}° ({:?})",
+            r.aided.heading_rms_rad.to_degrees(),
+            config.aiding.heading_weights
+        );
+        assert!(
+            r.unaided.heading_rms_rad > 10f64.to_radians(),
+            "unaided {:.2}°",
+            r.unaided.heading_rms_rad.to_degrees()
+        );
+    }
 }
 
 #[test]
