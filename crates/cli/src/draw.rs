@@ -19,6 +19,105 @@ pub enum DrawCommand {
     /// One scan of a log: points, level-1 and level-2 break-points, clusters
     /// and lines, in the sensor frame (the paper's Figures 1-3).
     Scan(ScanArgs),
+    /// A saved map (map.json of `run` or `map`) with the trajectories of a
+    /// trajectory file (scans.json of `run`, trajectory.json of `map`): the
+    /// paper's Figure 10.
+    Map {
+        /// The map (JSON).
+        map: PathBuf,
+        /// A trajectory file.
+        #[arg(long)]
+        trajectory: Option<PathBuf>,
+        /// Output picture: SVG, or PNG when the name ends in `.png`.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Headings over time from a trajectory file: the paper's Figure 11.
+    Heading {
+        /// A trajectory file (scans.json of `run`, trajectory.json of `map`).
+        trajectory: PathBuf,
+        /// Output picture: SVG, or PNG when the name ends in `.png`.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+}
+
+const SERIES_COLOURS: [&str; 5] = ["#2ca02c", "#1f77b4", "#ff7f0e", "#9467bd", "#8c564b"];
+
+fn draw_map(
+    map: &std::path::Path,
+    trajectory: Option<&std::path::Path>,
+    output: &std::path::Path,
+) -> Result<()> {
+    let map = pcaline_io::read_map(map)?;
+    let series = match trajectory {
+        Some(t) => pcaline_io::read_pose_series(t)?,
+        None => Vec::new(),
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let mut grow = |p: [f64; 2]| {
+        if p[0].is_finite() && p[1].is_finite() {
+            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+        }
+    };
+    for m in map.lines() {
+        grow([m.line.start.x, m.line.start.y]);
+        grow([m.line.end.x, m.line.end.y]);
+    }
+    for (_, s) in &series {
+        s.iter().flatten().for_each(|p| grow([p.x, p.y]));
+    }
+    if !lo[0].is_finite() {
+        return Err(BadInput("the map and trajectory are empty".into()).into());
+    }
+    let mut plot = Plot::new(lo, hi, 1000.0);
+    for m in map.lines() {
+        let l = &m.line;
+        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
+    }
+    plot.legend(&format!("line map ({} lines)", map.len()), "#d62728", false);
+    for ((name, s), colour) in series.iter().zip(SERIES_COLOURS.iter().cycle()) {
+        let pts: Vec<[f64; 2]> = s.iter().flatten().map(|p| [p.x, p.y]).collect();
+        plot.polyline(&pts, colour, 1.5, false);
+        plot.legend(name, colour, false);
+    }
+    write_picture(output, &plot.finish("Line map and trajectories"))
+}
+
+fn draw_heading(trajectory: &std::path::Path, output: &std::path::Path) -> Result<()> {
+    let series = pcaline_io::read_pose_series(trajectory)?;
+    let n = series.iter().map(|(_, s)| s.len()).max().unwrap_or(0);
+    // Unwrapped headings in degrees against the record index.
+    let unwrapped: Vec<(String, Vec<[f64; 2]>)> = series
+        .iter()
+        .map(|(name, s)| {
+            let mut out = Vec::new();
+            let (mut acc, mut prev): (f64, Option<f64>) = (0.0, None);
+            for (k, p) in s.iter().enumerate() {
+                let Some(p) = p else { continue };
+                acc += prev.map_or(p.heading, |q| pcaline::geometry::wrap_angle(p.heading - q));
+                prev = Some(p.heading);
+                out.push([k as f64, acc.to_degrees()]);
+            }
+            (name.clone(), out)
+        })
+        .collect();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in unwrapped.iter().flat_map(|(_, s)| s.iter()) {
+        lo = lo.min(p[1]);
+        hi = hi.max(p[1]);
+    }
+    if !lo.is_finite() {
+        return Err(BadInput(format!("{}: no poses", trajectory.display())).into());
+    }
+    let mut plot =
+        Plot::chart([0.0, lo], [n.max(1) as f64, hi], 1000.0, 420.0, ["scan", "heading (°)"]);
+    for ((name, s), colour) in unwrapped.iter().zip(SERIES_COLOURS.iter().cycle()) {
+        plot.polyline(s, colour, 1.5, false);
+        plot.legend(name, colour, false);
+    }
+    write_picture(output, &plot.finish("Heading over time"))
 }
 
 /// Arguments of `pcaline draw scan`.
@@ -43,7 +142,23 @@ const PALETTE: [&str; 6] = ["#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b
 
 /// Runs `pcaline draw`.
 pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
-    let DrawCommand::Scan(args) = cmd;
+    let args = match cmd {
+        DrawCommand::Scan(args) => args,
+        DrawCommand::Map { map, trajectory, output } => {
+            draw_map(map, trajectory.as_deref(), output)?;
+            if !quiet {
+                eprintln!("wrote {}", output.display());
+            }
+            return Ok(());
+        }
+        DrawCommand::Heading { trajectory, output } => {
+            draw_heading(trajectory, output)?;
+            if !quiet {
+                eprintln!("wrote {}", output.display());
+            }
+            return Ok(());
+        }
+    };
     let mut found = None;
     let mut k = 0;
     read_log(&args.file, &args.log.options(), |r| {

@@ -58,7 +58,8 @@ enum Command {
     /// Build the line map and the aided trajectory of a log, with the log's
     /// odometry as the localization source.
     Map(map_cmd::MapArgs),
-    /// Pictures: one scan with its break-points, clusters and lines.
+    /// Pictures: one scan with its break-points, clusters and lines (Figures
+    /// 1-3); a saved map with trajectories (Figure 10); headings over time (Figure 11).
     #[command(subcommand)]
     Draw(draw::DrawCommand),
     /// Generate, check or draw scene files.

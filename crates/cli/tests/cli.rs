@@ -69,6 +69,26 @@ fn run_on_a_small_generated_scene_writes_every_output() {
     }
     let svg = std::fs::read_to_string(dir.join("map.svg")).unwrap();
     assert!(svg.contains("x (m)") && svg.contains("line map"));
+    // Figures 10 and 11 again, from the saved map and trajectories.
+    let fig10 = tmp("fig10.svg");
+    let out = pcaline(&[
+        "--quiet",
+        "draw",
+        "map",
+        s(&dir.join("map.json")),
+        "--trajectory",
+        s(&dir.join("scans.json")),
+        "-o",
+        s(&fig10),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read_to_string(&fig10).unwrap().contains("true_pose"));
+    let fig11 = tmp("fig11.png");
+    let out = pcaline(&["--quiet", "draw", "heading", s(&dir.join("scans.json")), "-o", s(&fig11)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read(&fig11).unwrap().starts_with(b"\x89PNG"));
+    let out = pcaline(&["draw", "heading", s(&dir.join("map.svg")), "-o", s(&tmp("x.svg"))]);
+    assert_eq!(out.status.code(), Some(2), "a picture is not a trajectory file");
 }
 
 #[test]

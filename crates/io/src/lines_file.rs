@@ -148,6 +148,54 @@ pub fn read_map(path: &Path) -> Result<LineMap, IoError> {
     })
 }
 
+/// A named series of poses; `None` where a record has no pose of that name.
+pub type PoseSeries = (String, Vec<Option<pcaline_geometry::Pose2>>);
+
+/// Named pose series from a trajectory file written by `pcaline run`
+/// (`scans.json`) or `pcaline map` (`trajectory.json`): an array of objects
+/// in which every field holding three numbers `[x, y, heading]` is a pose of
+/// the series of that name (`true_pose`, `aided`, ...). Records without a
+/// field leave a gap in its series. Series are in the order their names first
+/// appear.
+pub fn read_pose_series(path: &Path) -> Result<Vec<PoseSeries>, IoError> {
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
+    let value: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| IoError::parse(path, Some(e.line()), e.to_string()))?;
+    let records = value
+        .as_array()
+        .ok_or_else(|| IoError::parse(path, Some(1), "expected an array of records"))?;
+    let mut series: Vec<PoseSeries> = Vec::new();
+    for (k, record) in records.iter().enumerate() {
+        let Some(fields) = record.as_object() else {
+            return Err(IoError::parse(path, None, format!("record {k} is not an object")));
+        };
+        for (name, v) in fields {
+            let pose = v.as_array().filter(|a| a.len() == 3).and_then(|a| {
+                let n: Vec<f64> = a.iter().filter_map(serde_json::Value::as_f64).collect();
+                (n.len() == 3).then(|| pcaline_geometry::Pose2::new(n[0], n[1], n[2]))
+            });
+            let Some(pose) = pose else { continue };
+            let index = match series.iter().position(|(s, _)| s == name) {
+                Some(i) => i,
+                None => {
+                    series.push((name.clone(), Vec::new()));
+                    series.len() - 1
+                }
+            };
+            let s = &mut series[index].1;
+            s.resize(k, None);
+            s.push(Some(pose));
+        }
+    }
+    for (_, s) in &mut series {
+        s.resize(records.len(), None);
+    }
+    if series.is_empty() {
+        return Err(IoError::parse(path, None, "no pose fields ([x, y, heading]) in the records"));
+    }
+    Ok(series)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
