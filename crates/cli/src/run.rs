@@ -13,7 +13,7 @@ use anyhow::{Context, Result};
 use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
 use pcaline::{LineDetector, LineSegment, MapperConfig, Pose2};
 use pcaline_eval::{MapQuality, TrajectoryErrors, VisibleWalls, map_quality, trajectory_errors};
-use pcaline_io::{parse_scene, read_scene, write_json, write_map_csv, write_map_json};
+use pcaline_io::{LineRecord, parse_scene, read_scene, write_json, write_map_csv, write_map_json};
 use pcaline_sim::{Scene, Simulator};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -110,33 +110,12 @@ struct ScanRecord {
     odometry_pose: [f64; 3],
     heading_aided_pose: [f64; 3],
     full_pose_aided_pose: [f64; 3],
-    /// Lines in the sensor frame.
+    /// Lines in the sensor frame (the schema of `pcaline detect`).
     lines: Vec<LineRecord>,
-}
-
-#[derive(Debug, Serialize)]
-struct LineRecord {
-    alpha: f64,
-    d: f64,
-    start: [f64; 2],
-    end: [f64; 2],
-    n_points: usize,
-    residual_std_m: f64,
 }
 
 fn pose_array(p: &Pose2) -> [f64; 3] {
     [p.x, p.y, p.heading]
-}
-
-fn line_record(l: &LineSegment) -> LineRecord {
-    LineRecord {
-        alpha: l.alpha,
-        d: l.d,
-        start: [l.start.x, l.start.y],
-        end: [l.end.x, l.end.y],
-        n_points: l.n_points,
-        residual_std_m: l.residual_std,
-    }
 }
 
 fn load(scene: &Option<PathBuf>) -> Result<(Scene, String)> {
@@ -180,6 +159,11 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         detect_time += t0.elapsed().as_secs_f64();
         sensor_lines.clear();
         sensor_lines.extend(detection.lines.iter().map(SensorLine::from));
+        let line_records: Vec<LineRecord> = detection
+            .lines
+            .iter()
+            .map(|l| LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))))
+            .collect();
         line_count += sensor_lines.len();
         residuals.extend(sensor_lines.iter().map(|l| l.line.residual_std));
         if frame.index % 20 == 0 {
@@ -197,7 +181,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
             odometry_pose: pose_array(&frame.odometry_pose),
             heading_aided_pose: pose_array(&estimates[1][frame.index]),
             full_pose_aided_pose: pose_array(&estimates[2][frame.index]),
-            lines: sensor_lines.iter().map(|l| line_record(&l.line)).collect(),
+            lines: line_records,
         });
         bar.inc(1);
     }

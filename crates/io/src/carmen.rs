@@ -82,6 +82,18 @@ impl<R: BufRead> CarmenReader<R> {
         s.parse::<f64>().map_err(|_| self.err(format!("{what} is not a number: {s:?}")))
     }
 
+    /// Three numbers from field `i` on as a pose; `what` prefixes the field
+    /// names in errors (`odom` -> `odom_x`, `odom_y`, `odom_theta`).
+    fn pose(&self, fields: &[&str], i: usize, what: &str) -> Result<Pose2, IoError> {
+        let name =
+            |axis: &str| if what.is_empty() { axis.to_string() } else { format!("{what}_{axis}") };
+        Ok(Pose2::new(
+            self.num(fields, i, &name("x"))?,
+            self.num(fields, i + 1, &name("y"))?,
+            self.num(fields, i + 2, &name("theta"))?,
+        ))
+    }
+
     fn count(&self, fields: &[&str], i: usize, what: &str) -> Result<usize, IoError> {
         let v = self.num(fields, i, what)?;
         if v < 0.0 || v.fract() != 0.0 || v > 1e6 {
@@ -107,16 +119,8 @@ impl<R: BufRead> CarmenReader<R> {
         let n = self.count(f, 0, "beam count")?;
         let ranges = self.ranges(f, 1, n)?;
         let p = 1 + n;
-        let pose = Pose2::new(
-            self.num(f, p, "x")?,
-            self.num(f, p + 1, "y")?,
-            self.num(f, p + 2, "theta")?,
-        );
-        let odom = Pose2::new(
-            self.num(f, p + 3, "odom_x")?,
-            self.num(f, p + 4, "odom_y")?,
-            self.num(f, p + 5, "odom_theta")?,
-        );
+        let pose = self.pose(f, p, "")?;
+        let odom = self.pose(f, p + 3, "odom")?;
         let stamp = self.num(f, p + 6, "ipc_timestamp")? + self.options.time_offset_s;
         let (angle_min, increment) = match self.options.fov_rad {
             Some(fov) if n > 1 => (-fov / 2.0, fov / (n - 1) as f64),
@@ -166,16 +170,8 @@ impl<R: BufRead> CarmenReader<R> {
             .collect();
         let m = self.count(f, 8 + n, "remission count")?;
         let p = 9 + n + m;
-        let laser = Pose2::new(
-            self.num(f, p, "laser_x")?,
-            self.num(f, p + 1, "laser_y")?,
-            self.num(f, p + 2, "laser_theta")?,
-        );
-        let robot = Pose2::new(
-            self.num(f, p + 3, "robot_x")?,
-            self.num(f, p + 4, "robot_y")?,
-            self.num(f, p + 5, "robot_theta")?,
-        );
+        let laser = self.pose(f, p, "laser")?;
+        let robot = self.pose(f, p + 3, "robot")?;
         let stamp = self.num(f, p + 11, "ipc_timestamp")? + self.options.time_offset_s;
         let scan = Scan::new(start as f32, res as f32, 0.0, max as f32, ranges).with_stamp(stamp);
         Ok(LogRecord::Scan(ScanRecord {
@@ -187,7 +183,7 @@ impl<R: BufRead> CarmenReader<R> {
     }
 
     fn odom(&self, f: &[&str]) -> Result<LogRecord, IoError> {
-        let pose = Pose2::new(self.num(f, 0, "x")?, self.num(f, 1, "y")?, self.num(f, 2, "theta")?);
+        let pose = self.pose(f, 0, "")?;
         let stamp = self.num(f, 6, "ipc_timestamp")? + self.options.time_offset_s;
         Ok(LogRecord::Odometry(OdometryRecord { pose, stamp_s: stamp, position: self.line_no }))
     }
