@@ -37,6 +37,9 @@ pub struct EvalArgs {
     /// CSAIL log against its corrected poses.
     #[arg(long)]
     real: bool,
+    /// Seed of the synthetic drift added to the Intel log's poses (for --real).
+    #[arg(long, default_value_t = 1)]
+    drift_seed: u64,
     /// The datasets folder (for --real); `$PCALINE_DATA` or `../shared/data`.
     #[arg(long)]
     data: Option<std::path::PathBuf>,
@@ -66,17 +69,11 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
             .clone()
             .or_else(|| std::env::var_os("PCALINE_DATA").map(Into::into))
             .unwrap_or_else(|| "../shared/data".into());
-        let (pairs, rows) = crate::eval_real::csail(&data)?;
-        println!("MIT CSAIL: {pairs} scans with corrected poses; estimates aligned at the first");
-        println!(
-            "{:<18} {:>12} {:>12} {:>10} {:>10}",
-            "trajectory", "heading rms", "heading max", "pos rms", "pos final"
-        );
-        for r in rows {
-            println!(
-                "{:<18} {:>10.2} ° {:>10.2} ° {:>8.2} m {:>8.2} m",
-                r.name, r.heading_rms_deg, r.heading_max_deg, r.position_rms_m, r.position_final_m
-            );
+        let report = crate::eval_real::evaluate(&data, args.drift_seed)?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report)?);
+        } else {
+            print_real(&report);
         }
         return Ok(());
     }
@@ -209,4 +206,71 @@ fn print_detection(rows: &[Row]) {
             r.time_per_scan_us
         );
     }
+}
+
+fn print_real(r: &crate::eval_real::RealReport) {
+    println!(
+        "MIT CSAIL: {} scans with corrected poses; absolute errors after aligning at the first, relation metric between consecutive corrected scans",
+        r.csail_pairs
+    );
+    println!(
+        "{:<32} {:>11} {:>11} {:>9} {:>9} {:>17} {:>17}",
+        "trajectory",
+        "heading rms",
+        "heading max",
+        "pos rms",
+        "pos final",
+        "rel. trans (m)",
+        "rel. rot (deg)"
+    );
+    for t in &r.csail {
+        let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
+        println!(
+            "{:<32} {:>9} ° {:>9} ° {:>7} m {:>7} m {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
+            t.name,
+            f(t.heading_rms_deg),
+            f(t.heading_max_deg),
+            f(t.position_rms_m),
+            f(t.position_final_m),
+            t.relations.translation_mean_m,
+            t.relations.translation_std_m,
+            t.relations.rotation_mean_deg,
+            t.relations.rotation_std_deg
+        );
+    }
+    println!();
+    println!(
+        "Intel: relation metric against intel.relations (drift seed {}; mean ± std)",
+        r.intel_drift_seed
+    );
+    println!(
+        "{:<32} {:>9} {:>9} {:>17} {:>17}",
+        "trajectory", "relations", "unmatched", "trans (m)", "rot (deg)"
+    );
+    for t in &r.intel {
+        println!(
+            "{:<32} {:>9} {:>9} {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
+            t.name,
+            t.relations.scored,
+            t.relations.unmatched,
+            t.relations.translation_mean_m,
+            t.relations.translation_std_m,
+            t.relations.rotation_mean_deg,
+            t.relations.rotation_std_deg
+        );
+    }
+    println!();
+    let u = &r.utm;
+    let [p10, p50, p90] = u.residual_std_p10_p50_p90_m;
+    println!(
+        "UTM-30LX-EW bag {}: {} scans, {} lines (median {} points)",
+        u.log, u.scans, u.lines, u.median_points
+    );
+    println!(
+        "per-line residual std: 10% {:.1} mm, median {:.1} mm, 90% {:.1} mm; {:.1}% of lines under 2 cm",
+        p10 * 1e3,
+        p50 * 1e3,
+        p90 * 1e3,
+        100.0 * u.fraction_under_2cm
+    );
 }

@@ -1,55 +1,194 @@
-//! `pcaline eval --real`: raw and aided odometry of the MIT CSAIL log
-//! against its GMapping-corrected poses.
+//! `pcaline eval --real`: the real-data part of the evaluation (design,
+//! section 5). The MIT CSAIL log's raw and aided odometry against its
+//! GMapping-corrected poses; the relation metric on the Intel log, first of
+//! its own corrected poses (a check of the metric) and then of the same poses
+//! with a seeded synthetic drift, raw and aided; and the per-line residuals
+//! of the UTM-30LX-EW bag.
 
 use anyhow::{Context, Result};
 use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
 use pcaline::{LineDetector, MapperConfig, Pose2};
-use pcaline_eval::aligned_trajectory_errors;
-use pcaline_io::{CarmenOptions, CarmenReader, LogRecord, read_scan_pairs};
+use pcaline_eval::{RelationErrors, StampedTrajectory, aligned_trajectory_errors, relation_errors};
+use pcaline_io::{
+    CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
+    read_scan_pairs,
+};
+use pcaline_sim::OdometryModel;
+use serde::Serialize;
+use std::ops::ControlFlow;
 use std::path::Path;
 
-/// One row: a trajectory against the corrected poses.
-pub struct RealRow {
-    /// Which trajectory.
-    pub name: &'static str,
-    /// Heading rms, degrees.
-    pub heading_rms_deg: f64,
-    /// Heading max, degrees.
-    pub heading_max_deg: f64,
-    /// Position rms, metres.
-    pub position_rms_m: f64,
-    /// Position error of the last pair, metres.
-    pub position_final_m: f64,
-}
+/// `intel.relations` is stamped in absolute time, `intel.gfs.log` relative to
+/// its start: this offset joins them (the datasets' README).
+const INTEL_TIME_OFFSET_S: f64 = 976052857.34;
+/// A relation's time meets a pose within this (the datasets' README).
+const INTEL_TOLERANCE_S: f64 = 0.05;
 
-/// Runs the comparison on `data/mit-csail`.
-pub fn csail(data: &Path) -> Result<(usize, Vec<RealRow>)> {
-    let dir = data.join("mit-csail");
-    let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt"))?;
-    let config = MapperConfig::default();
-    let mut detector = LineDetector::new(config.detector)?;
-    let modes = [
-        ("raw odometry", AidingConfig::none()),
+/// The synthetic drift added to the Intel log's corrected poses: a gyro-like
+/// heading-rate bias and random walk, a 3% speed error and a position random
+/// walk, of the order of a wheeled robot's odometry.
+pub const INTEL_DRIFT: OdometryModel = OdometryModel {
+    heading_rate_bias_rad_s: 0.002,
+    heading_random_walk_rad_sqrt_s: 0.002,
+    speed_scale_error: 0.03,
+    position_random_walk_m_sqrt_s: 0.005,
+};
+
+/// The aiding modes compared on real data.
+fn modes() -> [(&'static str, AidingConfig); 3] {
+    [
+        ("raw", AidingConfig::none()),
         ("heading-aided", AidingConfig::heading()),
         ("full-pose aided", AidingConfig::full_pose()),
-    ];
-    let mut loops: Vec<Aiding> =
-        modes.iter().map(|(_, a)| Aiding::new(*a, config.map)).collect::<Result<_, _>>()?;
-    let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); modes.len()];
-    let log = dir.join("mit-csail.clf");
-    let mut lines: Vec<SensorLine> = Vec::new();
-    for record in CarmenReader::open(&log, CarmenOptions::default())? {
-        let LogRecord::Scan(s) = record? else { continue };
-        let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
-        lines.clear();
-        lines.extend(detector.detect(&s.scan).lines.iter().map(SensorLine::from));
-        for (aiding, out) in loops.iter_mut().zip(poses.iter_mut()) {
-            out.push(aiding.step(&source, &lines).0);
+    ]
+}
+
+/// One trajectory against a reference: absolute errors after aligning at the
+/// first pose, and the relation metric.
+#[derive(Debug, Serialize)]
+pub struct TrajectoryRow {
+    /// Which trajectory.
+    pub name: String,
+    /// Heading rms after alignment, degrees (absent for relation-only rows).
+    pub heading_rms_deg: Option<f64>,
+    /// Largest heading error after alignment, degrees.
+    pub heading_max_deg: Option<f64>,
+    /// Position rms after alignment, metres.
+    pub position_rms_m: Option<f64>,
+    /// Position error of the last pose after alignment, metres.
+    pub position_final_m: Option<f64>,
+    /// Relation metric.
+    pub relations: RelationRow,
+}
+
+/// The relation metric of a trajectory (Kuemmerle et al. 2009).
+#[derive(Debug, Serialize)]
+pub struct RelationRow {
+    /// Relations scored.
+    pub scored: usize,
+    /// Relations with a time that met no pose.
+    pub unmatched: usize,
+    /// Mean and standard deviation of the translational error, metres.
+    pub translation_mean_m: f64,
+    /// Standard deviation of the translational error, metres.
+    pub translation_std_m: f64,
+    /// Mean rotational error, degrees.
+    pub rotation_mean_deg: f64,
+    /// Standard deviation of the rotational error, degrees.
+    pub rotation_std_deg: f64,
+}
+
+impl From<RelationErrors> for RelationRow {
+    fn from(e: RelationErrors) -> Self {
+        RelationRow {
+            scored: e.relations,
+            unmatched: e.unmatched,
+            translation_mean_m: e.translation_mean_m,
+            translation_std_m: e.translation_std_m,
+            rotation_mean_deg: e.rotation_mean_rad.to_degrees(),
+            rotation_std_deg: e.rotation_std_rad.to_degrees(),
         }
     }
+}
+
+/// Per-line residuals of a real scan log.
+#[derive(Debug, Serialize)]
+pub struct ResidualReport {
+    /// The log.
+    pub log: String,
+    /// Scans read.
+    pub scans: usize,
+    /// Lines detected.
+    pub lines: usize,
+    /// Median points per line.
+    pub median_points: usize,
+    /// Percentiles 10, 50 and 90 of the per-line residual std, metres.
+    pub residual_std_p10_p50_p90_m: [f64; 3],
+    /// Fraction of lines whose residual std is under 2 cm.
+    pub fraction_under_2cm: f64,
+}
+
+/// Everything `pcaline eval --real` measures.
+#[derive(Debug, Serialize)]
+pub struct RealReport {
+    /// MIT CSAIL: scans with corrected poses.
+    pub csail_pairs: usize,
+    /// MIT CSAIL trajectories against the corrected poses (relations between
+    /// consecutive corrected scans).
+    pub csail: Vec<TrajectoryRow>,
+    /// Intel: the relation metric of the log's own poses, then of the drifted
+    /// poses raw and aided.
+    pub intel: Vec<TrajectoryRow>,
+    /// Intel: the seed of the synthetic drift.
+    pub intel_drift_seed: u64,
+    /// The UTM-30LX-EW bag.
+    pub utm: ResidualReport,
+}
+
+/// Runs every real-data measurement on the datasets folder `data`.
+pub fn evaluate(data: &Path, seed: u64) -> Result<RealReport> {
+    let (csail_pairs, csail) = csail(data)?;
+    Ok(RealReport {
+        csail_pairs,
+        csail,
+        intel: intel(data, seed)?,
+        intel_drift_seed: seed,
+        utm: utm_residuals(&data.join("utm30lx-ros2"))?,
+    })
+}
+
+/// One detector and one aiding loop per mode, fed scan by scan.
+struct Loops {
+    detector: LineDetector,
+    loops: Vec<Aiding>,
+    lines: Vec<SensorLine>,
+}
+
+impl Loops {
+    fn new() -> Result<Self> {
+        let config = MapperConfig::default();
+        Ok(Loops {
+            detector: LineDetector::new(config.detector)?,
+            loops: modes()
+                .iter()
+                .map(|(_, a)| Aiding::new(*a, config.map))
+                .collect::<Result<_, _>>()?,
+            lines: Vec::new(),
+        })
+    }
+
+    /// The pose of each mode after the scan `scan` with source pose `source`.
+    fn step(&mut self, scan: &pcaline::Scan, source: &Pose2) -> Vec<Pose2> {
+        self.lines.clear();
+        self.lines.extend(self.detector.detect(scan).lines.iter().map(SensorLine::from));
+        self.loops.iter_mut().map(|a| a.step(source, &self.lines).0).collect()
+    }
+}
+
+/// MIT CSAIL: raw and aided odometry at the scans with corrected poses.
+fn csail(data: &Path) -> Result<(usize, Vec<TrajectoryRow>)> {
+    let dir = data.join("mit-csail");
+    let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt"))?;
+    let mut loops = Loops::new()?;
+    let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); 3];
+    for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
+        let LogRecord::Scan(s) = record? else { continue };
+        let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
+        for (out, pose) in poses.iter_mut().zip(loops.step(&s.scan, &source)) {
+            out.push(pose);
+        }
+    }
+    // Relations between consecutive corrected scans, stamped by pair index.
     let reference: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
+    let relations: Vec<Relation> = (1..reference.len())
+        .map(|k| Relation {
+            t1_s: (k - 1) as f64,
+            t2_s: k as f64,
+            relative: reference[k - 1].between(&reference[k]),
+        })
+        .collect();
     let mut rows = Vec::new();
-    for ((name, _), est) in modes.iter().zip(&poses) {
+    for ((name, _), est) in modes().iter().zip(&poses) {
         let picked: Vec<Pose2> = pairs
             .iter()
             .map(|p| {
@@ -57,13 +196,128 @@ pub fn csail(data: &Path) -> Result<(usize, Vec<RealRow>)> {
             })
             .collect::<Result<_>>()?;
         let e = aligned_trajectory_errors(&picked, &reference).context("no pairs")?;
-        rows.push(RealRow {
-            name,
-            heading_rms_deg: e.heading_rms_rad.to_degrees(),
-            heading_max_deg: e.heading_max_rad.to_degrees(),
-            position_rms_m: e.position_rms_m,
-            position_final_m: e.position_final_m,
+        let stamped = StampedTrajectory::new(
+            picked.iter().enumerate().map(|(k, p)| (k as f64, *p)).collect(),
+        );
+        let r = relation_errors(&stamped, &relations, 0.0).context("no relations")?;
+        rows.push(TrajectoryRow {
+            name: format!("{name} odometry"),
+            heading_rms_deg: Some(e.heading_rms_rad.to_degrees()),
+            heading_max_deg: Some(e.heading_max_rad.to_degrees()),
+            position_rms_m: Some(e.position_rms_m),
+            position_final_m: Some(e.position_final_m),
+            relations: r.into(),
         });
     }
     Ok((pairs.len(), rows))
+}
+
+/// A record of the Intel log in time order: its time, corrected pose and
+/// the scan if it is one.
+struct IntelRecord {
+    time_s: f64,
+    pose: Pose2,
+    scan: Option<pcaline::Scan>,
+}
+
+/// Intel: the relation metric of the log's own poses, and of the poses with
+/// the synthetic drift [`INTEL_DRIFT`] (seeded), raw and aided.
+fn intel(data: &Path, seed: u64) -> Result<Vec<TrajectoryRow>> {
+    let dir = data.join("intel");
+    let relations = read_relations(&dir.join("intel.relations"))?;
+    let options = CarmenOptions { time_offset_s: INTEL_TIME_OFFSET_S, ..CarmenOptions::default() };
+    let log = dir.join("intel.gfs.log");
+    let mut records = Vec::new();
+    for record in CarmenReader::open(&log, options)? {
+        records.push(match record? {
+            LogRecord::Scan(s) => IntelRecord {
+                time_s: s.scan.stamp_s.context("a FLASER line without a timestamp")?,
+                pose: s.pose.context("a FLASER line without a pose")?,
+                scan: Some(s.scan),
+            },
+            LogRecord::Odometry(o) => IntelRecord { time_s: o.stamp_s, pose: o.pose, scan: None },
+        });
+    }
+    records.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    let score = |poses: &[Pose2]| -> Result<RelationRow> {
+        let stamped = StampedTrajectory::new(
+            records.iter().zip(poses).map(|(r, p)| (r.time_s, *p)).collect(),
+        );
+        Ok(relation_errors(&stamped, &relations, INTEL_TOLERANCE_S)
+            .context("no relation of intel.relations meets a pose of intel.gfs.log")?
+            .into())
+    };
+    let corrected: Vec<Pose2> = records.iter().map(|r| r.pose).collect();
+    let times: Vec<f64> = records.iter().map(|r| r.time_s).collect();
+    let drifted = INTEL_DRIFT.corrupt_stamped(&corrected, &times, seed);
+
+    // Each mode's pose at every record: at a scan, its aiding loop's output;
+    // between scans, the drifted odometry's motion since the last scan
+    // composed onto it.
+    let mut loops = Loops::new()?;
+    let mut aided: Vec<Vec<Pose2>> = vec![Vec::with_capacity(records.len()); 3];
+    let mut at_last_scan: Option<(Pose2, Vec<Pose2>)> = None;
+    for (record, source) in records.iter().zip(&drifted) {
+        let poses = match (&record.scan, &at_last_scan) {
+            (Some(scan), _) => {
+                let poses = loops.step(scan, source);
+                at_last_scan = Some((*source, poses.clone()));
+                poses
+            }
+            (None, Some((source_then, poses))) => {
+                let motion = source_then.between(source);
+                poses.iter().map(|p| p.compose(&motion)).collect()
+            }
+            (None, None) => vec![*source; 3],
+        };
+        for (out, pose) in aided.iter_mut().zip(poses) {
+            out.push(pose);
+        }
+    }
+    let mut rows = vec![TrajectoryRow {
+        name: "log's own (GMapping) poses".into(),
+        heading_rms_deg: None,
+        heading_max_deg: None,
+        position_rms_m: None,
+        position_final_m: None,
+        relations: score(&corrected)?,
+    }];
+    for ((name, _), poses) in modes().iter().zip(&aided) {
+        rows.push(TrajectoryRow {
+            name: format!("drifted, {name}"),
+            heading_rms_deg: None,
+            heading_max_deg: None,
+            position_rms_m: None,
+            position_final_m: None,
+            relations: score(poses)?,
+        });
+    }
+    Ok(rows)
+}
+
+/// Per-line residual std of the default detector on a real log.
+pub fn utm_residuals(log: &Path) -> Result<ResidualReport> {
+    let mut detector = LineDetector::new(pcaline::Config::default())?;
+    let (mut residuals, mut points) = (Vec::new(), Vec::new());
+    let scans = read_log(log, &LogOptions::default(), |record| {
+        if let LogRecord::Scan(s) = record {
+            for l in detector.detect(&s.scan).lines {
+                residuals.push(l.line.residual_std);
+                points.push(l.line.n_points);
+            }
+        }
+        ControlFlow::Continue(())
+    })?;
+    residuals.sort_by(f64::total_cmp);
+    points.sort_unstable();
+    let pick = |q: f64| residuals.get(((residuals.len() as f64 - 1.0) * q) as usize).copied();
+    Ok(ResidualReport {
+        log: log.display().to_string(),
+        scans,
+        lines: residuals.len(),
+        median_points: points.get(points.len() / 2).copied().unwrap_or(0),
+        residual_std_p10_p50_p90_m: [0.1, 0.5, 0.9].map(|q| pick(q).unwrap_or(f64::NAN)),
+        fraction_under_2cm: residuals.iter().filter(|r| **r < 0.02).count() as f64
+            / residuals.len().max(1) as f64,
+    })
 }

@@ -16,6 +16,7 @@ mod detection;
 mod detection_run;
 mod fit_accuracy;
 mod map_quality;
+mod relation_metric;
 mod reproduce;
 mod trajectory;
 
@@ -23,6 +24,7 @@ pub use detection::{DetectionCriteria, DetectionScore, TrueWall, matches, true_w
 pub use detection_run::{DetectFn, DetectionEval, DetectorResult, evaluate_detectors};
 pub use fit_accuracy::{FitAccuracy, fit_accuracy};
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
+pub use relation_metric::{RelationErrors, StampedTrajectory, relation_errors};
 pub use reproduce::{
     ETH_EXPERIMENTS, EthExperiment, EthResult, FitRow, FitRowResult, TABLE1, TABLE2, TABLE3,
     dataset, run_eth, run_fit_row,

@@ -25,6 +25,7 @@ mod config_error;
 mod line;
 mod noise;
 mod pose;
+mod relation;
 mod scan;
 
 pub use angle::{line_angle_diff, wrap_angle};
@@ -34,4 +35,5 @@ pub use line::{LineSegment, SlopeIntercept};
 pub use nalgebra::{Matrix2, Point2, Vector2};
 pub use noise::RangeNoise;
 pub use pose::Pose2;
+pub use relation::Relation;
 pub use scan::Scan;

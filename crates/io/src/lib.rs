@@ -32,8 +32,9 @@ pub use lines_file::{
     write_json, write_map_csv, write_map_json,
 };
 pub use log::{LogFormat, LogOptions, read_log};
+pub use pcaline_geometry::Relation;
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
-pub use relations::{Relation, ScanPair, read_relations, read_scan_pairs};
+pub use relations::{ScanPair, read_relations, read_scan_pairs};
 pub use ros::{read_mcap, read_ros1_bag, read_ros2_bag};
 pub use scan_text::{ScanJson, read_scan_csv, read_scan_json, scans_to_csv};
 pub use scene_file::{parse_scene, read_scene, write_scene};

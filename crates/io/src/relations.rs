@@ -2,20 +2,9 @@
 //! pose at `t2` expressed in the frame of `t1`.
 
 use crate::IoError;
-use pcaline_geometry::Pose2;
+use pcaline_geometry::{Pose2, Relation};
 use std::io::BufRead;
 use std::path::Path;
-
-/// One ground-truth relation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Relation {
-    /// Time of the first pose, seconds.
-    pub t1_s: f64,
-    /// Time of the second pose, seconds.
-    pub t2_s: f64,
-    /// The second pose in the frame of the first (x, y, yaw).
-    pub relative: Pose2,
-}
 
 /// Calls `each` with the 1-based line number and the numbers of every line
 /// of `path` that is not blank or a `#` comment, checking there are `fields`

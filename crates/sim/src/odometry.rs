@@ -24,13 +24,27 @@ impl OdometryModel {
     /// first pose is exact, each later one composes a corrupted increment.
     /// Noise of step `k` comes from its own seeded stream.
     pub fn corrupt(&self, truth: &[Pose2], dt_s: f64, seed: u64) -> Vec<Pose2> {
+        self.corrupt_with(truth, |_| dt_s, seed)
+    }
+
+    /// As [`OdometryModel::corrupt`], for poses sampled at the times `times_s`
+    /// (seconds, one per pose, non-decreasing; a log's timestamps): step `k`
+    /// lasts `times_s[k] - times_s[k - 1]` (a negative or NaN step counts as 0).
+    /// Extra poses or times beyond the shorter slice are ignored.
+    pub fn corrupt_stamped(&self, truth: &[Pose2], times_s: &[f64], seed: u64) -> Vec<Pose2> {
+        let n = truth.len().min(times_s.len());
+        self.corrupt_with(&truth[..n], |k| times_s[k] - times_s[k - 1], seed)
+    }
+
+    fn corrupt_with(&self, truth: &[Pose2], dt_of: impl Fn(usize) -> f64, seed: u64) -> Vec<Pose2> {
         let mut out = Vec::with_capacity(truth.len());
         let Some(first) = truth.first() else {
             return out;
         };
         out.push(*first);
-        let sqrt_dt = dt_s.max(0.0).sqrt();
         for k in 1..truth.len() {
+            let dt_s = dt_of(k).max(0.0);
+            let sqrt_dt = dt_s.sqrt();
             let inc = truth[k - 1].between(&truth[k]);
             let mut rng = stream_rng(seed, Stream::Odometry, k as u64);
             let mut normal = || -> f64 { StandardNormal.sample(&mut rng) };
@@ -96,5 +110,17 @@ mod tests {
         };
         assert_eq!(m.corrupt(&truth, 0.025, 3), m.corrupt(&truth, 0.025, 3));
         assert_ne!(m.corrupt(&truth, 0.025, 3), m.corrupt(&truth, 0.025, 4));
+    }
+
+    #[test]
+    fn stamped_steps_follow_the_timestamps() {
+        let truth: Vec<_> = (0..4).map(|k| Pose2::new(k as f64, 0.0, 0.0)).collect();
+        let m = OdometryModel { heading_rate_bias_rad_s: 0.1, ..Default::default() };
+        // Steps of 1 s, 3 s, then a backwards stamp (counted as 0 s).
+        let odo = m.corrupt_stamped(&truth, &[0.0, 1.0, 4.0, 3.0], 1);
+        assert!((odo[3].heading - 0.4).abs() < 1e-12, "{:?}", odo[3]);
+        let uniform = m.corrupt(&truth, 0.5, 9);
+        assert_eq!(m.corrupt_stamped(&truth, &[0.0, 0.5, 1.0, 1.5], 9), uniform);
+        assert_eq!(m.corrupt_stamped(&truth, &[0.0, 0.5], 9).len(), 2);
     }
 }
