@@ -255,7 +255,7 @@ fn intel(data: &Path, seed: u64) -> Result<Vec<TrajectoryRow>> {
     // between scans, the drifted odometry's motion since the last scan
     // composed onto it.
     let mut loops = Loops::new()?;
-    let mut aided: Vec<Vec<Pose2>> = vec![Vec::with_capacity(records.len()); 3];
+    let mut aided: Vec<Vec<Pose2>> = vec![Vec::new(); 3];
     let mut at_last_scan: Option<(Pose2, Vec<Pose2>)> = None;
     for (record, source) in records.iter().zip(&drifted) {
         let poses = match (&record.scan, &at_last_scan) {
