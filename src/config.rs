@@ -6,6 +6,7 @@ use pcaline_segmentation::SegmentationConfig;
 
 /// Configuration of [`crate::LineDetector`]: segmentation and fitting.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Config {
     /// Level-1 and level-2 clustering.
     pub segmentation: SegmentationConfig,

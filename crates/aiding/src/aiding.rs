@@ -106,10 +106,13 @@ impl Aiding {
                 _ => 1,
             };
             for round in 0..rounds {
+                let viewpoint = Point2::new(pose.x, pose.y);
                 let world = self.world_lines(&pose, lines);
                 let matches: Vec<_> = world
                     .iter()
-                    .filter_map(|(l, _)| self.map.find_match(l).map(|m| (l, m)))
+                    .filter_map(|(l, _)| {
+                        self.map.find_match_seen_from(l, Some(&viewpoint)).map(|m| (l, m))
+                    })
                     .collect();
                 report.matches = matches.len();
                 if matches.is_empty() {
@@ -152,11 +155,12 @@ impl Aiding {
                     continue;
                 }
                 // Translation from the matched lines' normal offsets.
+                let viewpoint = Point2::new(pose.x, pose.y);
                 let world = self.world_lines(&pose, lines);
                 let constraints: Vec<NormalConstraint> = world
                     .iter()
                     .filter_map(|(l, _)| {
-                        let m = self.map.find_match(l)?;
+                        let m = self.map.find_match_seen_from(l, Some(&viewpoint))?;
                         let map_line = &self.map.lines()[m.index].line;
                         let n = map_line.normal();
                         let var = l.residual_std.powi(2) / l.n_points.max(1) as f64
@@ -189,8 +193,9 @@ impl Aiding {
             pose = predicted;
             report.fallback = Some(Fallback::NonFiniteCorrection);
         }
+        let viewpoint = Point2::new(pose.x, pose.y);
         for (l, m) in self.world_lines(&pose, lines) {
-            self.map.insert(&l, &m);
+            self.map.insert_seen_from(&l, &m, Some(&viewpoint));
         }
         self.corrected = Some(pose);
         (pose, report)

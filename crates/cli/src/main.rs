@@ -8,6 +8,7 @@
 // The one crate that talks to a terminal.
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+mod config_file;
 mod detect;
 mod draw;
 mod eval_cmd;

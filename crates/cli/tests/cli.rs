@@ -216,3 +216,43 @@ fn real_data_eval_checks_its_metrics_against_the_datasets() {
     assert_eq!(v["utm"]["scans"], 885);
     assert!(f(&v["utm"]["residual_std_p10_p50_p90_m"][1]) < 0.01, "{}", v["utm"]);
 }
+
+#[test]
+fn eval_compares_two_configurations_side_by_side() {
+    let file = tmp("eth20.toml");
+    std::fs::write(&file, "preset = \"default\"\n[detector.fitting]\neth = 20.0\n").unwrap();
+    let out = pcaline(&[
+        "--quiet",
+        "eval",
+        "--config",
+        "default",
+        "--config",
+        s(&file),
+        "--sigma-mm",
+        "30",
+        "--seeds",
+        "1",
+        "--scans",
+        "4",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let detection = v["detection"].as_array().unwrap();
+    assert_eq!(detection.len(), 2);
+    assert_eq!(detection[1]["config"], s(&file));
+    // Four aiding modes per configuration; full-pose aiding bounds the drift.
+    let localization = v["localization"].as_array().unwrap();
+    assert_eq!(localization.len(), 8);
+    let full = localization.iter().find(|r| r["config"] == "default" && r["aiding"] == "full-pose");
+    assert!(full.unwrap()["position_rms_m"].as_f64().unwrap() < 0.05, "{full:?}");
+    let none = &localization[0];
+    assert!(none["heading_rms_deg"].as_f64().unwrap() > 1.0, "{none}");
+
+    // A typo in a configuration file names the file and the key, exit code 2.
+    std::fs::write(&file, "preset = \"default\"\n[detector.fitting]\netha = 20.0\n").unwrap();
+    let out = pcaline(&["eval", "--config", s(&file), "--no-localization"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("eth20.toml") && err.contains("detector.fitting.etha"), "{err}");
+}

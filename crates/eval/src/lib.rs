@@ -15,6 +15,7 @@
 mod detection;
 mod detection_run;
 mod fit_accuracy;
+mod localization;
 mod map_quality;
 mod relation_metric;
 mod reproduce;
@@ -22,7 +23,8 @@ mod trajectory;
 
 pub use detection::{DetectionCriteria, DetectionScore, TrueWall, matches, true_walls};
 pub use detection_run::{DetectFn, DetectionEval, DetectorResult, evaluate_detectors};
-pub use fit_accuracy::{FitAccuracy, fit_accuracy};
+pub use fit_accuracy::{FitAccuracy, RangeBearingAccuracy, fit_accuracy, range_bearing_accuracy};
+pub use localization::{AidedRun, AidedScore, MAP_MAX_ANGLE_DEG, MAP_TOLERANCE_M};
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
 pub use relation_metric::{RelationErrors, StampedTrajectory, relation_errors};
 pub use reproduce::{

@@ -24,6 +24,7 @@ mod least_squares;
 mod merge;
 mod moments;
 mod pca;
+mod range_bearing;
 mod residual;
 
 pub use corners::refine_boundaries;
@@ -33,12 +34,14 @@ pub use least_squares::{fit_least_squares, slope_intercept_from_moments, vertica
 pub use merge::{MergeRule, Piece, merge_adjacent};
 pub use moments::Moments;
 pub use pca::{fit_pca, fit_pca_slope_intercept, line_from_eigen, line_from_moments};
+pub use range_bearing::{fit_weighted, pca_covariance, point_covariance};
 pub use residual::ResidualTest;
 
 use pcaline_geometry::{ConfigError, RangeNoise};
 
 /// Configuration of the fitting stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FitConfig {
     /// The eigenvalue-ratio threshold `ETh`: a piece is a line when
     /// `lambda_max / lambda_min > eth` (paper: 50). Must be > 1.

@@ -16,6 +16,7 @@ use pcaline_geometry::RangeNoise;
 /// follows `chi²(N - 2) / (N - 2)`, so 3 sigma rejects a true line with
 /// probability below 1e-5 for 5 points and far less for more.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ResidualTest {
     /// Largest residual std, in range-noise sigmas.
     pub max_sigmas: f64,

@@ -9,6 +9,7 @@ use crate::ConfigError;
 /// everywhere ([`RangeNoise::constant`]). Noise-aware thresholds and the line
 /// covariance use this model.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RangeNoise {
     /// Sigma in metres for ranges below `far_from_m`.
     pub near_sigma_m: f64,

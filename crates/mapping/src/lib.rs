@@ -62,8 +62,35 @@ pub struct MapConfig {
     /// corner is straight but points anywhere; it may still be absorbed by a
     /// map line it matches.
     pub max_new_alpha_std_rad: Option<f64>,
+    /// A map line remembers the side it was seen from, and a line seen from
+    /// the other side does not match it: the two faces of a thin wall stay
+    /// two map lines instead of pulling the pose across the wall. Needs the
+    /// viewpoint ([`LineMap::insert_seen_from`]); off in the paper (and in
+    /// map files written before the option existed).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub sided: bool,
+    /// A detected line merges into the map line it matches only within this
+    /// gate; otherwise it starts a new map line. The matching gates allow for
+    /// the pose error before aiding; merging happens after it. `None` in the
+    /// paper (and in older map files).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub merge_gate: Option<MergeGate>,
     /// Cell size of the spatial index, metres.
     pub grid_cell_m: f64,
+}
+
+/// When a matched line may merge into a map line (both endpoints of the
+/// new line are tested).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct MergeGate {
+    /// Largest distance of an endpoint from the map line, metres: a wall's
+    /// 10 cm end face beside a box face must not bend the box's line.
+    pub max_offset_m: f64,
+    /// Largest gap along the line between the new line and the map line's
+    /// extent, metres: collinear walls either side of a doorway stay two
+    /// map lines instead of one line across the door.
+    pub max_gap_m: f64,
 }
 
 impl MapConfig {
@@ -77,6 +104,8 @@ impl MapConfig {
             refine: false,
             robust_extent: false,
             max_new_alpha_std_rad: None,
+            sided: false,
+            merge_gate: None,
             grid_cell_m: 2.0,
         }
     }
@@ -98,6 +127,14 @@ impl MapConfig {
         if let Some(a) = self.max_new_alpha_std_rad {
             ConfigError::check(a > 0.0, "mapping.max_new_alpha_std", a, "must be > 0")?;
         }
+        if let Some(g) = self.merge_gate {
+            for (field, v) in [
+                ("mapping.merge_gate.max_offset_m", g.max_offset_m),
+                ("mapping.merge_gate.max_gap_m", g.max_gap_m),
+            ] {
+                ConfigError::check(v >= 0.0 && v.is_finite(), field, v, "must be finite and >= 0")?;
+            }
+        }
         if let Some(o) = self.max_offset_m {
             ConfigError::check(
                 o > 0.0 && o.is_finite(),
@@ -118,8 +155,9 @@ impl MapConfig {
 impl Default for MapConfig {
     /// Gates for an aided pose (5°, 0.15 m off the line, `d_rho` 1 m), the
     /// segment-gap centroid term (long walls stay one map line), refinement
-    /// from all absorbed points, a robust extent, and new map lines only from
-    /// lines whose orientation is known to 1°.
+    /// from all absorbed points, a robust extent, new map lines only from
+    /// lines whose orientation is known to 1°, sided lines, and merges only of
+    /// lines within 5 cm of a map line and 0.3 m of its ends.
     fn default() -> Self {
         MapConfig {
             max_d_alpha_rad: 5f64.to_radians(),
@@ -129,6 +167,8 @@ impl Default for MapConfig {
             refine: true,
             robust_extent: true,
             max_new_alpha_std_rad: Some(1f64.to_radians()),
+            sided: true,
+            merge_gate: Some(MergeGate { max_offset_m: 0.05, max_gap_m: 0.3 }),
             grid_cell_m: 2.0,
         }
     }

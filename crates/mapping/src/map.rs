@@ -3,9 +3,9 @@
 //! projection, and the refined variant that keeps every absorbed point's sums.
 
 use crate::grid::Grid;
-use crate::{LineDistance, MapConfig, line_distance};
+use crate::{LineDistance, MapConfig, MergeGate, line_distance};
 use pcaline_fitting::{Moments, line_from_moments};
-use pcaline_geometry::{ConfigError, LineSegment, Point2};
+use pcaline_geometry::{ConfigError, LineSegment, Point2, Vector2};
 
 /// A stable identifier of a map line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -25,6 +25,9 @@ pub struct MapLine {
     pub observations: u32,
     /// The most extreme endpoints observed on each side (for the robust extent).
     pub extremes: Extremes,
+    /// Unit normal pointing from the line to the side it was first seen
+    /// from; `None` when inserted without a viewpoint.
+    pub facing: Option<Vector2<f64>>,
 }
 
 /// The extent of a map line: the accepted endpoints and, with the robust
@@ -181,6 +184,28 @@ impl LineMap {
     /// centroid are examined (spatial index). `None` for no match or a
     /// non-finite line.
     pub fn find_match(&self, line: &LineSegment) -> Option<Match> {
+        self.find_match_seen_from(line, None)
+    }
+
+    /// As [`LineMap::find_match`], for a line seen from `viewpoint` (the
+    /// sensor position, world frame): with [`MapConfig::sided`], map lines
+    /// seen from the other side are skipped.
+    pub fn find_match_seen_from(
+        &self,
+        line: &LineSegment,
+        viewpoint: Option<&Point2<f64>>,
+    ) -> Option<Match> {
+        self.best_match(line, viewpoint, None)
+    }
+
+    /// The best match of `line` under the matching gates and, when `merge`
+    /// is set, under the merge gate.
+    fn best_match(
+        &self,
+        line: &LineSegment,
+        viewpoint: Option<&Point2<f64>>,
+        merge: Option<MergeGate>,
+    ) -> Option<Match> {
         if !(line.alpha.is_finite()
             && line.d.is_finite()
             && line.centroid.coords.iter().all(|v| v.is_finite()))
@@ -198,9 +223,13 @@ impl LineMap {
             let offset_ok = self.config.max_offset_m.is_none_or(|max| {
                 (m.line.normal().dot(&line.centroid.coords) - m.line.d).abs() < max
             });
+            let side_ok = !self.config.sided || same_side(m, viewpoint);
+            let merge_ok = merge.is_none_or(|gate| within_merge_gate(&m.line, line, &gate));
             if distance.d_alpha.abs() < self.config.max_d_alpha_rad
                 && distance.d_rho < self.config.max_d_rho_m
                 && offset_ok
+                && side_ok
+                && merge_ok
                 && best.is_none_or(|b| distance.d_rho < b.distance.d_rho)
             {
                 best = Some(Match { index, id: m.id, distance });
@@ -219,13 +248,26 @@ impl LineMap {
         line: &LineSegment,
         moments: &Moments,
     ) -> Option<(LineId, Option<Match>)> {
+        self.insert_seen_from(line, moments, None)
+    }
+
+    /// As [`LineMap::insert`], for a line seen from `viewpoint` (the sensor
+    /// position, world frame): a new map line remembers the side it was seen
+    /// from, and with [`MapConfig::sided`] only lines seen from the same side
+    /// merge into it.
+    pub fn insert_seen_from(
+        &mut self,
+        line: &LineSegment,
+        moments: &Moments,
+        viewpoint: Option<&Point2<f64>>,
+    ) -> Option<(LineId, Option<Match>)> {
         if !(line.alpha.is_finite()
             && line.d.is_finite()
             && line.start.coords.iter().chain(line.end.coords.iter()).all(|v| v.is_finite()))
         {
             return None;
         }
-        match self.find_match(line) {
+        match self.best_match(line, viewpoint, self.config.merge_gate) {
             Some(m) => {
                 self.absorb(m.index, line, moments);
                 Some((m.id, Some(m)))
@@ -247,6 +289,7 @@ impl LineMap {
                     moments: *moments,
                     observations: 1,
                     extremes: Extremes::of(line),
+                    facing: viewpoint.and_then(|v| facing(line, v)),
                 });
                 Some((id, None))
             }
@@ -295,6 +338,37 @@ impl LineMap {
     }
 }
 
+/// Whether `new` may merge into map line `map`: both endpoints within
+/// `gate.max_offset_m` of the line, and its extent within `gate.max_gap_m`
+/// of the map line's along the line.
+fn within_merge_gate(map: &LineSegment, new: &LineSegment, gate: &MergeGate) -> bool {
+    let n = map.normal();
+    let offsets_ok =
+        [new.start, new.end].iter().all(|p| (n.dot(&p.coords) - map.d).abs() <= gate.max_offset_m);
+    let along = |p: &Point2<f64>| (p - map.start).dot(&map.direction);
+    let (a, b) = (along(&new.start), along(&new.end));
+    let (lo, hi) = (a.min(b), a.max(b));
+    let map_end = along(&map.end);
+    let (map_lo, map_hi) = (map_end.min(0.0), map_end.max(0.0));
+    let gap = (lo - map_hi).max(map_lo - hi).max(0.0);
+    offsets_ok && gap <= gate.max_gap_m
+}
+
+/// The unit normal of `line` pointing to `viewpoint`'s side; `None` when
+/// the viewpoint lies on the line or is not finite.
+fn facing(line: &LineSegment, viewpoint: &Point2<f64>) -> Option<Vector2<f64>> {
+    let s = line.normal().dot(&viewpoint.coords) - line.d;
+    (s.is_finite() && s != 0.0).then(|| line.normal() * s.signum())
+}
+
+/// Whether `viewpoint` is on the side map line `m` was seen from (true when
+/// either is unknown).
+fn same_side(m: &MapLine, viewpoint: Option<&Point2<f64>>) -> bool {
+    let (Some(facing), Some(v)) = (m.facing, viewpoint) else { return true };
+    let n = m.line.normal();
+    (n.dot(&v.coords) - m.line.d) * n.dot(&facing) > 0.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -329,7 +403,7 @@ mod tests {
         let mut map = LineMap::new(MapConfig::default()).unwrap();
         let (a, ma) = wall(3.0, 0.0, 1.0);
         map.insert(&a, &ma);
-        let (b, mb) = wall(3.1, 1.0, 2.0);
+        let (b, mb) = wall(3.03, 1.0, 2.0);
         map.insert(&b, &mb);
         // The robust extent waits for a second observation of an extension.
         assert!((map.lines()[0].line.length() - 1.0).abs() < 0.01);
@@ -337,7 +411,7 @@ mod tests {
         let l = &map.lines()[0].line;
         assert!((l.length() - 2.0).abs() < 0.01, "{l:?}");
         assert_eq!(map.lines()[0].moments.n, 63);
-        assert!(l.centroid.x > 3.0 && l.centroid.x < 3.1);
+        assert!(l.centroid.x > 3.0 && l.centroid.x < 3.03);
     }
 
     #[test]
@@ -411,5 +485,43 @@ mod tests {
         assert!(map.insert(&a, &ma).is_none());
         assert!(map.find_match(&a).is_none());
         assert!(map.is_empty());
+    }
+
+    #[test]
+    fn the_two_faces_of_a_thin_wall_stay_two_sided_lines() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        let (west, mw) = wall(0.0, 0.0, 3.0);
+        let (east, me) = wall(0.04, 0.0, 3.0);
+        let (from_west, from_east) = (Point2::new(-2.0, 1.5), Point2::new(2.0, 1.5));
+        let (a, _) = map.insert_seen_from(&west, &mw, Some(&from_west)).unwrap();
+        let (b, m) = map.insert_seen_from(&east, &me, Some(&from_east)).unwrap();
+        assert!(a != b && m.is_none(), "the far face must not merge into the near one");
+        // Each face matches only from its own side.
+        assert_eq!(map.find_match_seen_from(&west, Some(&from_west)).unwrap().id, a);
+        assert_eq!(map.find_match_seen_from(&east, Some(&from_east)).unwrap().id, b);
+        // Unsided (the paper), the far face merges into the near one.
+        let mut paper = LineMap::new(MapConfig { sided: false, ..MapConfig::default() }).unwrap();
+        paper.insert_seen_from(&west, &mw, Some(&from_west));
+        assert!(paper.insert_seen_from(&east, &me, Some(&from_east)).unwrap().1.is_some());
+    }
+
+    #[test]
+    fn the_merge_gate_keeps_doorways_and_end_faces_out_of_a_line() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        let (left, ml) = wall(0.0, 0.0, 2.0);
+        let id = map.insert(&left, &ml).unwrap().0;
+        // Collinear, across a 0.5 m gap: it matches (the same infinite line,
+        // so the aiding may use it) but starts its own map line.
+        let (right, mr) = wall(0.0, 2.5, 3.3);
+        assert_eq!(map.find_match(&right).unwrap().id, id);
+        let (right_id, m) = map.insert(&right, &mr).unwrap();
+        assert!(right_id != id && m.is_none());
+        // 8 cm in front of the wall (a face of something else): its own line.
+        let (front, mf) = wall(0.08, 0.5, 1.0);
+        assert!(map.insert(&front, &mf).unwrap().1.is_none());
+        // A new observation overlapping the wall, 1 cm off: merged.
+        let (again, ma) = wall(0.01, 1.5, 2.2);
+        assert_eq!(map.insert(&again, &ma).unwrap().0, id);
+        assert_eq!(map.len(), 3);
     }
 }

@@ -29,6 +29,10 @@ pub struct MapLineRecord {
     pub scatter: [f64; 3],
     /// Detections merged.
     pub observations: u32,
+    /// Unit normal towards the side the line was seen from (absent in
+    /// files written before it existed).
+    #[serde(default)]
+    pub facing: Option<[f64; 2]>,
 }
 
 /// A saved map.
@@ -65,6 +69,7 @@ impl MapRecord {
                     centroid: [m.moments.mean.x, m.moments.mean.y],
                     scatter: [m.moments.sxx, m.moments.sxy, m.moments.syy],
                     observations: m.observations,
+                    facing: m.facing.map(|f| [f.x, f.y]),
                 }
             })
             .collect();
@@ -110,7 +115,14 @@ impl MapRecord {
                     pending_low: [None; 2],
                     pending_high: [None; 2],
                 };
-                MapLine { id: LineId(r.id), line, moments, observations: r.observations, extremes }
+                MapLine {
+                    id: LineId(r.id),
+                    line,
+                    moments,
+                    observations: r.observations,
+                    extremes,
+                    facing: r.facing.map(|f| Vector2::new(f[0], f[1])),
+                }
             })
             .collect();
         LineMap::from_lines(self.config, lines)

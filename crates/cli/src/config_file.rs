@@ -1,0 +1,227 @@
+//! Configurations named on the command line (`pcaline eval --config`): a
+//! preset name, or a TOML or JSON file that names a preset and overrides
+//! some of its fields:
+//!
+//! ```toml
+//! preset = "default"          # paper | default | split-and-merge
+//! [detector.fitting]
+//! eth = 30.0
+//! min_line_points = 8
+//! [map]
+//! max_offset_m = 0.2
+//! ```
+//!
+//! `pcaline eval --show-config NAME` prints a preset in this form with every
+//! field. An unknown key is an error naming it; an enum field (such as
+//! `detector.segmentation.level2`) is replaced whole when the file names
+//! another variant.
+
+use crate::exit::BadInput;
+use anyhow::Result;
+use pcaline::mapping::MapConfig;
+use pcaline::{Config, RangeNoise};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use toml::Value;
+
+/// The presets a configuration may start from.
+pub const PRESETS: [&str; 4] = ["paper", "default", "split-and-merge", "told-sigma"];
+
+/// A detector and map configuration with the name it was given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedConfig {
+    /// The preset name or the file's path.
+    pub name: String,
+    /// The detector.
+    pub detector: Config,
+    /// The line map.
+    pub map: MapConfig,
+}
+
+/// The form of a configuration file.
+#[derive(Debug, Serialize, Deserialize)]
+struct ConfigFile {
+    preset: String,
+    detector: Config,
+    map: MapConfig,
+}
+
+/// The preset `name`; `told-sigma` is the default detector told the range
+/// noise `sigma_m` (constant).
+fn preset(name: &str, sigma_m: f64) -> Option<(Config, MapConfig)> {
+    let map = MapConfig::default();
+    Some(match name {
+        "paper" => (Config::paper(), MapConfig::paper()),
+        "default" => (Config::default(), map),
+        "split-and-merge" => (Config::split_and_merge(), map),
+        "told-sigma" => (Config::noise_aware(RangeNoise::constant(sigma_m.max(1e-3))), map),
+        _ => return None,
+    })
+}
+
+/// Resolves `spec`: a preset name, or the path of a TOML (`.toml`) or JSON
+/// file. `sigma_m` is the range noise `told-sigma` is told.
+pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
+    if let Some((detector, map)) = preset(spec, sigma_m) {
+        return Ok(NamedConfig { name: spec.to_string(), detector, map });
+    }
+    let path = Path::new(spec);
+    if !path.exists() {
+        return Err(BadInput(format!(
+            "--config {spec}: neither a preset ({}) nor a file",
+            PRESETS.join(", ")
+        ))
+        .into());
+    }
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| BadInput(format!("{}: cannot read: {e}", path.display())))?;
+    // TOML values carry what a preset may hold (infinities) and JSON does not.
+    let overrides: Value = if path.extension().is_some_and(|e| e == "json") {
+        let v: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| BadInput(format!("{}: not JSON: {e}", path.display())))?;
+        Value::try_from(v).map_err(|e| BadInput(format!("{}: {e}", path.display())))?
+    } else {
+        toml::from_str(&text).map_err(|e| BadInput(format!("{}: not TOML: {e}", path.display())))?
+    };
+    let Some(base_name) = overrides.get("preset").and_then(Value::as_str) else {
+        return Err(BadInput(format!(
+            "{}: missing `preset = \"...\"` ({})",
+            path.display(),
+            PRESETS.join(", ")
+        ))
+        .into());
+    };
+    let Some((detector, map)) = preset(base_name, sigma_m) else {
+        return Err(BadInput(format!(
+            "{}: unknown preset {base_name:?} ({})",
+            path.display(),
+            PRESETS.join(", ")
+        ))
+        .into());
+    };
+    let mut merged = Value::try_from(ConfigFile { preset: base_name.into(), detector, map })?;
+    merge(&mut merged, &overrides, "").map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+    let file: ConfigFile =
+        merged.try_into().map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+    file.detector
+        .validate()
+        .and_then(|()| file.map.validate())
+        .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+    Ok(NamedConfig { name: spec.to_string(), detector: file.detector, map: file.map })
+}
+
+/// The preset `name` as a configuration file (TOML), every field written.
+pub fn show(name: &str) -> Result<String> {
+    let Some((detector, map)) = preset(name, 0.01) else {
+        return Err(BadInput(format!(
+            "--show-config {name}: not a preset ({})",
+            PRESETS.join(", ")
+        ))
+        .into());
+    };
+    Ok(toml::to_string(&ConfigFile { preset: name.into(), detector, map })?)
+}
+
+/// Writes `overrides` into `base`: objects key by key, anything else whole.
+/// A key absent from `base` is an error naming its path, except where `base`
+/// holds an enum variant (an object of one key) and the override names another.
+fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> {
+    let (Value::Table(b), Value::Table(o)) = (&mut *base, overrides) else {
+        *base = overrides.clone();
+        return Ok(());
+    };
+    let is_variant = b.len() == 1 && o.len() == 1 && b.keys().next() != o.keys().next();
+    if is_variant && b.values().next().is_some_and(Value::is_table) {
+        *base = overrides.clone();
+        return Ok(());
+    }
+    for (key, value) in o {
+        let here = if path.is_empty() { key.clone() } else { format!("{path}.{key}") };
+        match b.get_mut(key) {
+            Some(slot) => merge(slot, value, &here)?,
+            // Optional fields absent from the preset (`None`) may be set.
+            None if path.is_empty() && key == "preset" => {}
+            None if optional_field(&here) => {
+                b.insert(key.clone(), value.clone());
+            }
+            None => return Err(format!("unknown key `{here}`")),
+        }
+    }
+    Ok(())
+}
+
+/// Fields of type `Option<_>` that a preset may leave out (`None`).
+fn optional_field(path: &str) -> bool {
+    const OPTIONAL: [&str; 5] = [
+        "detector.fitting.residual_test",
+        "map.max_offset_m",
+        "map.max_new_alpha_std_rad",
+        "map.merge_gate",
+        "detector.segmentation.level2",
+    ];
+    OPTIONAL.contains(&path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("pcaline-config-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn every_preset_round_trips_through_its_file_form() {
+        for name in PRESETS {
+            let text = show(name).unwrap();
+            let path = write(&format!("{name}.toml"), &text);
+            let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
+            let p = resolve(name, 0.01).unwrap();
+            assert_eq!((c.detector, c.map), (p.detector, p.map), "{name}:\n{text}");
+        }
+    }
+
+    #[test]
+    fn a_file_overrides_only_the_fields_it_names() {
+        let path = write(
+            "eth.toml",
+            "preset = \"default\"\n[detector.fitting]\neth = 30.0\n[map]\nmax_offset_m = 0.2\n",
+        );
+        let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
+        let mut expected = Config::default();
+        expected.fitting.eth = 30.0;
+        assert_eq!(c.detector, expected);
+        assert_eq!(c.map.max_offset_m, Some(0.2));
+        assert_eq!(c.map.max_d_rho_m, MapConfig::default().max_d_rho_m);
+        // The paper's map has no offset gate; a file may add one.
+        let path = write("paper.json", r#"{"preset": "paper", "map": {"max_offset_m": 0.1}}"#);
+        assert_eq!(resolve(path.to_str().unwrap(), 0.01).unwrap().map.max_offset_m, Some(0.1));
+    }
+
+    #[test]
+    fn bad_files_name_the_file_and_the_key() {
+        let cases = [
+            (
+                "typo.toml",
+                "preset = \"default\"\n[detector.fitting]\nethh = 3.0\n",
+                "detector.fitting.ethh",
+            ),
+            ("nopreset.toml", "[map]\nmax_d_rho_m = 2.0\n", "missing `preset"),
+            ("badpreset.toml", "preset = \"best\"\n", "unknown preset"),
+            ("invalid.toml", "preset = \"default\"\n[detector.fitting]\neth = 0.5\n", "eth"),
+            ("type.toml", "preset = \"default\"\n[map]\nmax_d_rho_m = \"far\"\n", "invalid type"),
+            ("syntax.toml", "preset = \n", "not TOML"),
+        ];
+        for (name, text, expect) in cases {
+            let path = write(name, text);
+            let e = resolve(path.to_str().unwrap(), 0.01).unwrap_err().to_string();
+            assert!(e.contains(name) && e.contains(expect), "{name}: {e}");
+        }
+        let e = resolve("no-such-preset-or-file", 0.01).unwrap_err().to_string();
+        assert!(e.contains("neither a preset"), "{e}");
+    }
+}
