@@ -58,6 +58,7 @@ impl Config {
                 residual_test: None,
                 min_line_points: 0,
                 min_line_length_m: 0.0,
+                orientation_test: None,
             },
         }
     }

@@ -206,6 +206,9 @@ impl LineDetector {
             if let Some(line) = line_from_moments(&piece.moments, &first, &last)
                 && line.n_points >= fit.min_line_points
                 && line.length() >= fit.min_line_length_m
+                && fit
+                    .orientation_test
+                    .is_none_or(|t| t.accepts(&piece.moments, &piece.moments.eigen()))
             {
                 self.lines.push(DetectedLine {
                     line,

@@ -152,8 +152,9 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 5] = [
+    const OPTIONAL: [&str; 6] = [
         "detector.fitting.residual_test",
+        "detector.fitting.orientation_test",
         "map.max_offset_m",
         "map.max_new_alpha_std_rad",
         "map.merge_gate",

@@ -51,8 +51,8 @@ fn bins(w: &Wall, bin_m: f64) -> usize {
 pub struct MapQuality {
     /// Number of map lines.
     pub lines: usize,
-    /// Per map line: the rms distance of its two endpoints from the nearest
-    /// true wall (metres), in map order.
+    /// Per map line: the rms orthogonal distance of its two endpoints from
+    /// the line of its nearest true wall (metres), in map order.
     pub line_errors_m: Vec<f64>,
     /// Map lines farther than `tolerance_m` (rms) from every wall, or more
     /// than `max_angle_rad` off it.
@@ -63,9 +63,14 @@ pub struct MapQuality {
 }
 
 /// Compares `map` with the walls seen in `visible`. A map line belongs to the
-/// wall minimising the rms distance of its endpoints from the wall's segment;
-/// it covers the bins of that wall its extent projects onto, when its rms
-/// distance is within `tolerance_m` and its direction within `max_angle_rad`.
+/// nearest (orthogonal distance) of the walls its extent overlaps, or to the
+/// wall segment nearest its endpoints when it overlaps none; its error
+/// is the rms orthogonal distance of its endpoints from that wall's line
+/// (design, section 5). It is spurious when that error exceeds `tolerance_m`
+/// or its direction is more than `max_angle_rad` off. It covers the bins its
+/// extent projects onto of every wall whose line it lies on within both
+/// tolerances: a map line along a corridor whose doorways the sensor never
+/// saw edge-on covers every wall piece between them.
 pub fn map_quality(
     map: &[MapLine],
     visible: &VisibleWalls,
@@ -75,33 +80,54 @@ pub fn map_quality(
     let mut covered: Vec<Vec<bool>> = visible.seen.iter().map(|v| vec![false; v.len()]).collect();
     let mut line_errors_m = Vec::with_capacity(map.len());
     let mut spurious = 0;
+    let on_wall = |l: &LineSegment, w: &Wall| {
+        let dir = (w.b - w.a).normalize();
+        let angle = l.direction.dot(&dir).abs().min(1.0).acos();
+        (rms_to_line(l, w), angle)
+    };
     for m in map {
         let l = &m.line;
-        let best = visible
+        // The nearest wall among those the line overlaps (orthogonal
+        // distance), else the nearest segment.
+        let overlapping = visible
             .walls
             .iter()
             .enumerate()
-            .map(|(i, w)| (i, rms_to_segment(l, w)))
+            .filter(|(_, w)| overlap_m(l, w) > 0.0)
+            .map(|(i, w)| (i, on_wall(l, w).0))
             .min_by(|a, b| a.1.total_cmp(&b.1));
-        let Some((wi, err)) = best else {
+        let best = overlapping.or_else(|| {
+            visible
+                .walls
+                .iter()
+                .enumerate()
+                .map(|(i, w)| (i, rms_to_segment(l, w)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+        });
+        let Some((wi, _)) = best else {
             spurious += 1;
             line_errors_m.push(f64::INFINITY);
             continue;
         };
+        let (err, angle) = on_wall(l, &visible.walls[wi]);
         line_errors_m.push(err);
-        let w = &visible.walls[wi];
-        let dir = (w.b - w.a).normalize();
-        let angle = l.direction.dot(&dir).abs().min(1.0).acos();
         if err > tolerance_m || angle > max_angle_rad {
             spurious += 1;
             continue;
         }
-        let (s0, s1) = ((l.start - w.a).dot(&dir), (l.end - w.a).dot(&dir));
-        let (lo, hi) = (s0.min(s1), s0.max(s1));
-        for (k, c) in covered[wi].iter_mut().enumerate() {
-            let mid = (k as f64 + 0.5) * visible.bin_m;
-            if mid >= lo && mid <= hi {
-                *c = true;
+        for (w, cov) in visible.walls.iter().zip(covered.iter_mut()) {
+            let (e, a) = on_wall(l, w);
+            if e > tolerance_m || a > max_angle_rad {
+                continue;
+            }
+            let dir = (w.b - w.a).normalize();
+            let (s0, s1) = ((l.start - w.a).dot(&dir), (l.end - w.a).dot(&dir));
+            let (lo, hi) = (s0.min(s1), s0.max(s1));
+            for (k, c) in cov.iter_mut().enumerate() {
+                let mid = (k as f64 + 0.5) * visible.bin_m;
+                if mid >= lo && mid <= hi {
+                    *c = true;
+                }
             }
         }
     }
@@ -120,6 +146,25 @@ pub fn map_quality(
     }
 }
 
+/// Length of the overlap of the segment's projection onto the wall with the wall.
+fn overlap_m(l: &LineSegment, w: &Wall) -> f64 {
+    let ab = w.b - w.a;
+    let len = ab.norm();
+    let dir = ab / len;
+    let (s0, s1) = ((l.start - w.a).dot(&dir), (l.end - w.a).dot(&dir));
+    (s0.max(s1).min(len) - s0.min(s1).max(0.0)).max(0.0)
+}
+
+/// Rms orthogonal distance of the segment's two endpoints from the wall's line.
+fn rms_to_line(l: &LineSegment, w: &Wall) -> f64 {
+    let dir = (w.b - w.a).normalize();
+    let d = |p: &Point2<f64>| {
+        let v = p - w.a;
+        (v.x * dir.y - v.y * dir.x).abs()
+    };
+    ((d(&l.start).powi(2) + d(&l.end).powi(2)) / 2.0).sqrt()
+}
+
 /// Rms distance of the segment's two endpoints from the wall segment.
 fn rms_to_segment(l: &LineSegment, w: &Wall) -> f64 {
     let d = |p: &Point2<f64>| point_segment_distance(p, &w.a, &w.b);
@@ -131,4 +176,43 @@ fn point_segment_distance(p: &Point2<f64>, a: &Point2<f64>, b: &Point2<f64>) -> 
     let len2 = ab.norm_squared();
     let t = if len2 > 0.0 { ((p - a).dot(&ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
     (p - (a + ab * t)).norm()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pcaline_fitting::{Moments, fit_pca};
+    use pcaline_mapping::{LineId, LineMap, MapConfig};
+
+    fn map_line(a: (f64, f64), b: (f64, f64)) -> MapLine {
+        let pts: Vec<_> = (0..=10)
+            .map(|i| {
+                let t = i as f64 / 10.0;
+                Point2::new(a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t)
+            })
+            .collect();
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        map.insert(&fit_pca(&pts).unwrap(), &Moments::from_points(&pts));
+        let mut l = map.lines()[0].clone();
+        l.id = LineId(0);
+        l
+    }
+
+    #[test]
+    fn a_line_across_an_unseen_doorway_covers_both_walls_and_an_offset_line_is_spurious() {
+        let wall =
+            |x0: f64, x1: f64| Wall { a: Point2::new(x0, 0.0), b: Point2::new(x1, 0.0), shape: 0 };
+        let mut visible = VisibleWalls::new(&[wall(0.0, 2.0), wall(3.0, 5.0)], 0.05);
+        for row in &mut visible.seen {
+            row.iter_mut().for_each(|b| *b = true);
+        }
+        let across = map_line((0.0, 0.0), (5.0, 0.0));
+        let q = map_quality(std::slice::from_ref(&across), &visible, 0.05, 2f64.to_radians());
+        assert_eq!(q.spurious, 0);
+        assert!(q.line_errors_m[0] < 1e-9 && (q.covered_fraction - 1.0).abs() < 1e-9, "{q:?}");
+        let off = map_line((0.5, 0.1), (1.5, 0.1));
+        let q = map_quality(&[off], &visible, 0.05, 2f64.to_radians());
+        assert_eq!(q.spurious, 1);
+        assert!((q.line_errors_m[0] - 0.1).abs() < 1e-9 && q.covered_fraction == 0.0, "{q:?}");
+    }
 }

@@ -3,7 +3,7 @@
 //! points are dropped.
 
 use crate::BreakRule;
-use pcaline_geometry::ScanPoints;
+use pcaline_geometry::{RangeNoise, ScanPoints, Vector2};
 use std::ops::Range;
 
 /// True when consecutive points `i` and `j` of `points` are separated by a
@@ -44,14 +44,7 @@ pub fn level1_clusters(
         return;
     }
     breaks.push(0);
-    let mut start = 0;
-    let mut on_break = |j: usize| {
-        breaks.push(j);
-        if j - start >= min_points {
-            clusters.push(start..j);
-        }
-        start = j;
-    };
+    let mut cut = Cuts { breaks, clusters, start: 0, min_points };
     // One tight loop per rule, so the rule is matched once, not per point.
     let xy = &points.xy;
     match *rule {
@@ -59,23 +52,131 @@ pub fn level1_clusters(
             let t2 = dth_m * dth_m;
             for j in 1..n {
                 if (xy[j] - xy[j - 1]).norm_squared() > t2 {
-                    on_break(j);
+                    cut.at(j);
                 }
             }
         }
-        BreakRule::Adaptive { .. } => {
+        BreakRule::Adaptive { lambda_rad, sigma_factor, noise, grazing } => {
             let mut cached = CachedRule::new(rule);
             for j in 1..n {
                 let step = (points.angle_rad[j] - points.angle_rad[j - 1]).abs();
-                if cached.is_break(points, j - 1, j, step) {
-                    on_break(j);
+                if !cached.is_break(points, j - 1, j, step) {
+                    continue;
                 }
+                let regular = |a: usize, b: usize| {
+                    (points.angle_rad[b] - points.angle_rad[a]).abs() <= 0.5 * lambda_rad
+                };
+                if grazing
+                    && j >= 2
+                    && regular(j - 2, j - 1)
+                    && regular(j - 1, j)
+                    && continues_line(points, j, sigma_factor, &noise)
+                {
+                    if cut.start == j - 1 {
+                        // Three points on one grazing line: the break before
+                        // the middle one was wrong too.
+                        cut.undo_last();
+                    }
+                    continue;
+                }
+                cut.at(j);
             }
         }
     }
-    if n - start >= min_points {
-        clusters.push(start..n);
+    cut.finish(n);
+}
+
+/// The level-1 cuts made so far.
+struct Cuts<'a> {
+    breaks: &'a mut Vec<usize>,
+    clusters: &'a mut Vec<Range<usize>>,
+    start: usize,
+    min_points: usize,
+}
+
+impl Cuts<'_> {
+    /// A break before point `j`.
+    fn at(&mut self, j: usize) {
+        self.breaks.push(j);
+        if j - self.start >= self.min_points {
+            self.clusters.push(self.start..j);
+        }
+        self.start = j;
     }
+
+    /// Takes back the last break (its cluster, if kept, reopens).
+    fn undo_last(&mut self) {
+        if self.breaks.len() < 2 {
+            return;
+        }
+        self.breaks.pop();
+        let previous = *self.breaks.last().unwrap_or(&0);
+        if self.clusters.last().is_some_and(|c| c.start == previous && c.end == self.start) {
+            self.clusters.pop();
+        }
+        self.start = previous;
+    }
+
+    fn finish(&mut self, n: usize) {
+        if n - self.start >= self.min_points {
+            self.clusters.push(self.start..n);
+        }
+    }
+}
+
+/// Whether point `j` continues the line through points `j - 2` and `j - 1`
+/// (a wall seen at grazing incidence, whose points are farther apart than
+/// any break threshold): its distance from that line is within
+/// `sigma_factor` standard deviations of the prediction, given the range
+/// noise `noise` of the three points projected across the line, and the
+/// spacings of the two steps differ by less than half (a doorway seen
+/// edge-on, a far wall collinear with a near one, is a jump in spacing).
+///
+/// ```
+/// use pcaline_geometry::{BearingTable, RangeNoise, Scan, ScanPoints};
+/// use pcaline_segmentation::continues_line;
+/// // A wall 1 m to the side, seen 80-84° off its normal: 0.1-0.2 m apart.
+/// let angle_min = 80f32.to_radians() - std::f32::consts::FRAC_PI_2;
+/// let inc = 1f32.to_radians();
+/// let ranges: Vec<f32> =
+///     (0..5).map(|i| 1.0 / (angle_min + i as f32 * inc).cos().abs()).collect();
+/// let mut p = ScanPoints::default();
+/// p.fill_from(&Scan::new(angle_min, inc, 0.1, 30.0, ranges), &mut BearingTable::default());
+/// assert!(continues_line(&p, 4, 3.0, &RangeNoise::constant(0.01)));
+/// ```
+pub fn continues_line(
+    points: &ScanPoints,
+    j: usize,
+    sigma_factor: f64,
+    noise: &RangeNoise,
+) -> bool {
+    if j < 2 || j >= points.len() {
+        return false;
+    }
+    let (a, b, c) = (points.xy[j - 2], points.xy[j - 1], points.xy[j]);
+    let (s1, s2) = ((b - a).norm(), (c - b).norm());
+    if !(s1 > 0.0 && s2 > 0.0) {
+        return false;
+    }
+    let slack = sigma_factor * noise.sigma_at(points.range_m[j]);
+    if s1.max(s2) > 1.5 * s1.min(s2) + slack {
+        return false;
+    }
+    let u = (b - a) / s1;
+    let normal = Vector2::new(-u.y, u.x);
+    // Noise of each point across the line: its range noise times the cosine
+    // between its beam and the line's normal.
+    let across = |k: usize| {
+        let r = points.range_m[k];
+        noise.sigma_at(r) * (normal.dot(&points.xy[k].coords) / r).abs()
+    };
+    let lever = s2 / s1;
+    let predicted_var = across(j).powi(2)
+        + (across(j - 1) * (1.0 + lever)).powi(2)
+        + (across(j - 2) * lever).powi(2);
+    let distance = normal.dot(&(c - b)).abs();
+    // The floor covers the f32 rounding of noise-free ranges.
+    distance <= sigma_factor * predicted_var.sqrt() + 1e-6 * points.range_m[j]
 }
 
 /// For a closed (360°) scan: the index of a point that begins a level-1
@@ -199,5 +300,65 @@ mod tests {
         assert!(rule.threshold_m(25.0, 25.5, 0.25f64.to_radians()) > 0.3);
         // Near points: a 15 cm gap at 1 m is a real break.
         assert!(rule.threshold_m(1.0, 1.0, 0.25f64.to_radians()) < 0.15);
+    }
+
+    /// Ranges of a wall `y = 1` (1 m to the left of the sensor) for bearings
+    /// `from_deg`, `from_deg + step_deg`, ...
+    fn side_wall(from_deg: f32, step_deg: f32, n: usize) -> Vec<f32> {
+        (0..n).map(|i| 1.0 / (from_deg + i as f32 * step_deg).to_radians().sin()).collect()
+    }
+
+    fn adaptive(grazing: bool) -> BreakRule {
+        BreakRule::Adaptive {
+            lambda_rad: 10f64.to_radians(),
+            sigma_factor: 3.0,
+            noise: pcaline_geometry::RangeNoise::constant(0.01),
+            grazing,
+        }
+    }
+
+    #[test]
+    fn a_wall_seen_at_grazing_incidence_stays_one_cluster() {
+        // Bearings 4°..30° at 0.25°: incidence 86° down to 60°, spacing 0.25 m
+        // down to 1.5 cm, beyond the adaptive threshold below ~10°.
+        let scan = Scan::new(
+            4f32.to_radians(),
+            0.25f32.to_radians(),
+            0.1,
+            30.0,
+            side_wall(4.0, 0.25, 105),
+        );
+        let p = points_of(&scan);
+        let (mut b, mut c) = (vec![], vec![]);
+        level1_clusters(&p, &adaptive(true), 5, &mut b, &mut c);
+        assert_eq!(c, vec![0..105], "breaks {b:?}");
+        level1_clusters(&p, &adaptive(false), 5, &mut b, &mut c);
+        assert!(c.len() == 1 && c[0].start > 10, "without it the far end breaks up: {c:?}");
+    }
+
+    #[test]
+    fn grazing_continuation_still_breaks_at_depth_jumps_and_spacing_jumps() {
+        let mut ranges = side_wall(4.0, 0.25, 60);
+        // A step back by 0.5 m in the middle (an object edge): a break.
+        for r in &mut ranges[30..] {
+            *r += 0.5;
+        }
+        let scan = Scan::new(4f32.to_radians(), 0.25f32.to_radians(), 0.1, 30.0, ranges);
+        let p = points_of(&scan);
+        let (mut b, mut c) = (vec![], vec![]);
+        level1_clusters(&p, &adaptive(true), 5, &mut b, &mut c);
+        assert!(b.contains(&30), "{b:?}");
+        // The same line on both sides of four beams with no return (a
+        // doorway seen edge-on): the spacing jumps, so a break.
+        let mut ranges = side_wall(4.0, 0.25, 30);
+        for r in &mut ranges[10..14] {
+            *r = f32::NAN;
+        }
+        let scan = Scan::new(4f32.to_radians(), 0.25f32.to_radians(), 0.1, 30.0, ranges);
+        let p = points_of(&scan);
+        level1_clusters(&p, &adaptive(true), 5, &mut b, &mut c);
+        assert!(b.contains(&10), "{b:?}");
+        assert!(!continues_line(&p, 10, 3.0, &pcaline_geometry::RangeNoise::constant(0.01)));
+        assert!(continues_line(&p, 9, 3.0, &pcaline_geometry::RangeNoise::constant(0.01)));
     }
 }

@@ -29,7 +29,7 @@ mod level1;
 mod level2;
 mod split;
 
-pub use level1::{is_break, level1_clusters, seam_start};
+pub use level1::{continues_line, is_break, level1_clusters, seam_start};
 pub use level2::{DerivativeSign, derivative_peak_split};
 pub use split::split_at_farthest;
 
@@ -60,6 +60,14 @@ pub enum BreakRule {
         sigma_factor: f64,
         /// The sensor's range noise.
         noise: RangeNoise,
+        /// Keep a wall seen at grazing incidence (shallower than `lambda`)
+        /// whole: a point farther than the threshold still joins the cluster
+        /// when it continues the line of the two points before it, within
+        /// `sigma_factor` of the noise across that line, and with a spacing
+        /// that grows smoothly ([`continues_line`]). Without it a corridor
+        /// wall seen far ahead breaks into single points.
+        #[cfg_attr(feature = "serde", serde(default))]
+        grazing: bool,
     },
 }
 
@@ -75,6 +83,7 @@ impl BreakRule {
             lambda_rad: 10.0 * std::f64::consts::PI / 180.0,
             sigma_factor: 3.0,
             noise: RangeNoise::utm30lx(),
+            grazing: true,
         }
     }
 
@@ -123,7 +132,7 @@ impl BreakRule {
                 dth_m,
                 "must be finite and > 0",
             ),
-            BreakRule::Adaptive { lambda_rad, sigma_factor, noise } => {
+            BreakRule::Adaptive { lambda_rad, sigma_factor, noise, .. } => {
                 ConfigError::check(
                     lambda_rad > 0.0 && lambda_rad < std::f64::consts::FRAC_PI_2,
                     "segmentation.level1.lambda",
@@ -196,6 +205,7 @@ impl SegmentationConfig {
                 lambda_rad: 10.0 * std::f64::consts::PI / 180.0,
                 sigma_factor: 3.0,
                 noise,
+                grazing: true,
             },
             min_cluster_points: 5,
             level2: Level2Rule::SplitAtFarthest { sigma_factor: 4.0, min_distance_m: 0.0, noise },
