@@ -43,7 +43,7 @@ impl OrientationTest {
     /// spread).
     pub fn predicted_std_rad(&self, moments: &Moments, eigen: &SymmetricEigen2) -> f64 {
         let information = moments.n as f64 * eigen.lambda_max;
-        if moments.n < 2 || !(information > 0.0) {
+        if moments.n < 2 || information.is_nan() || information <= 0.0 {
             return f64::INFINITY;
         }
         self.noise.sigma_at(moments.mean.coords.norm()) / information.sqrt()
