@@ -7,7 +7,9 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use pcaline::geometry::{BearingTable, ScanPoints};
-use pcaline::segmentation::{BreakRule, level1_clusters, split_at_farthest};
+use pcaline::segmentation::{
+    BreakRule, NoiseEstimation, estimate_range_noise, level1_clusters, split_at_farthest,
+};
 use pcaline::{Config, LineDetector, RangeNoise, Scan};
 use pcaline_sim::Simulator;
 use std::hint::black_box;
@@ -53,8 +55,11 @@ fn detection(c: &mut Criterion) {
     }
 
     let mut group = c.benchmark_group("detect_1081_beams");
+    let told = Config::noise_aware(RangeNoise::utm30lx());
     for (name, scan) in &scans {
-        for (preset, config) in [("default", Config::default()), ("paper", Config::paper())] {
+        for (preset, config) in
+            [("default", Config::default()), ("told-noise", told), ("paper", Config::paper())]
+        {
             let mut det = LineDetector::new(config).unwrap();
             group.bench_with_input(BenchmarkId::new(preset, name), scan, |b, s| {
                 b.iter(|| black_box(det.detect(black_box(s)).lines.len()))
@@ -91,6 +96,17 @@ fn detection(c: &mut Criterion) {
                 split_at_farthest(&points, c.clone(), &noise, 4.0, 0.0, &mut stack, &mut subs);
             }
             black_box(subs.len())
+        })
+    });
+    let mut scratch = pcaline::segmentation::NoiseScratch::default();
+    group.bench_function("noise_estimate", |b| {
+        b.iter(|| {
+            black_box(estimate_range_noise(
+                black_box(&points),
+                &noise,
+                &NoiseEstimation::standard(),
+                &mut scratch,
+            ))
         })
     });
     group.finish();

@@ -2,7 +2,7 @@
 
 use pcaline_fitting::FitConfig;
 use pcaline_geometry::{ConfigError, RangeNoise};
-use pcaline_segmentation::SegmentationConfig;
+use pcaline_segmentation::{NoiseEstimation, SegmentationConfig};
 
 /// Configuration of [`crate::LineDetector`]: segmentation and fitting.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -12,6 +12,12 @@ pub struct Config {
     pub segmentation: SegmentationConfig,
     /// PCA fit, elongation test and merge.
     pub fitting: FitConfig,
+    /// Estimate the range noise from each scan and use it, instead of the
+    /// noise the rules were built with, in every noise-aware threshold
+    /// ([`pcaline_segmentation::estimate_range_noise`]). `None`: the rules'
+    /// own noise (the paper's rules have none).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub noise_estimation: Option<NoiseEstimation>,
 }
 
 impl Config {
@@ -19,17 +25,47 @@ impl Config {
     /// dropped, signed derivative peaks (eq. 2a/2b), `ETh` 50, merge by eq. 7
     /// with `alpha_T` 0.05°.
     pub fn paper() -> Self {
-        Config { segmentation: SegmentationConfig::paper(), fitting: FitConfig::paper() }
+        Config {
+            segmentation: SegmentationConfig::paper(),
+            fitting: FitConfig::paper(),
+            noise_estimation: None,
+        }
     }
 
-    /// The noise-aware detector for a sensor with range noise `noise`: adaptive
-    /// level-1 threshold, recursive split at 4 sigma instead of derivative
-    /// peaks, `ETh` 50, and a merge that tests the residual increase of one
-    /// line through both pieces against the noise instead of a fixed 0.05° angle.
+    /// The noise-aware detector told that the sensor's range noise is
+    /// `noise`: adaptive level-1 threshold (with grazing walls kept whole),
+    /// recursive split at 4 sigma instead of derivative peaks, a merge that
+    /// tests the residual increase of one line through both pieces against
+    /// the noise instead of a fixed 0.05° angle, a residual test, and only
+    /// lines whose orientation the noise determines to 2°
+    /// ([`FitConfig::noise_aware`]).
     pub fn noise_aware(noise: RangeNoise) -> Self {
         Config {
             segmentation: SegmentationConfig::noise_aware(noise),
             fitting: FitConfig::noise_aware(noise),
+            noise_estimation: None,
+        }
+    }
+
+    /// The same configuration, estimating the range noise from each scan
+    /// (the rules' noise becomes the nominal the estimate starts from).
+    pub fn with_noise_estimation(self, estimation: NoiseEstimation) -> Self {
+        Config { noise_estimation: Some(estimation), ..self }
+    }
+
+    /// The range noise the rules were built with: that of the first
+    /// noise-aware rule (level 1, level 2, merge, residual test, orientation
+    /// test); `None` when no rule uses noise (the paper).
+    pub fn nominal_noise(&self) -> Option<RangeNoise> {
+        self.segmentation.noise().or_else(|| self.fitting.noise())
+    }
+
+    /// The same configuration with every noise-aware rule using `noise`.
+    pub fn with_noise(self, noise: RangeNoise) -> Self {
+        Config {
+            segmentation: self.segmentation.with_noise(noise),
+            fitting: self.fitting.with_noise(noise),
+            ..self
         }
     }
 
@@ -60,12 +96,16 @@ impl Config {
                 min_line_length_m: 0.0,
                 orientation_test: None,
             },
+            noise_estimation: None,
         }
     }
 
     /// Checks every value; an invalid one is a [`ConfigError`] naming the field.
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.segmentation.validate()?;
+        if let Some(e) = self.noise_estimation {
+            e.validate()?;
+        }
         self.fitting.validate()
     }
 }
@@ -75,7 +115,9 @@ impl Default for Config {
     /// beyond). It differs from the paper where the paper's fixed thresholds
     /// fail under noise: the fixed `DTh` over-segments far walls, derivative
     /// peaks of noisy points split walls every few points, and eq. 7's 0.05°
-    /// never merges noisy pieces.
+    /// never merges noisy pieces. It does not estimate the noise from each
+    /// scan ([`Config::with_noise_estimation`]): on the Intel log the estimate
+    /// loosened the thresholds and full-pose aiding drifted 25% more.
     fn default() -> Self {
         Config::noise_aware(RangeNoise::utm30lx())
     }

@@ -5,9 +5,10 @@ use crate::Config;
 use pcaline_fitting::{
     Moments, Piece, is_elongated, line_from_moments, merge_adjacent, refine_boundaries,
 };
-use pcaline_geometry::{BearingTable, ConfigError, LineSegment, Scan, ScanPoints};
+use pcaline_geometry::{BearingTable, ConfigError, LineSegment, RangeNoise, Scan, ScanPoints};
 use pcaline_segmentation::{
-    Level2Rule, derivative_peak_split, level1_clusters, seam_start, split_at_farthest,
+    Level2Rule, NoiseScratch, derivative_peak_split, estimate_range_noise, level1_clusters,
+    seam_start, split_at_farthest,
 };
 use std::ops::Range;
 
@@ -52,6 +53,9 @@ impl DetectedLine {
 pub struct Detection<'a> {
     /// The detected lines, in scan order.
     pub lines: &'a [DetectedLine],
+    /// The range noise estimated from this scan and used by the thresholds,
+    /// when the configuration estimates it ([`Config::noise_estimation`]).
+    pub noise: Option<RangeNoise>,
     /// The valid returns as points in the sensor frame (eq. 1), in scan order;
     /// for a closed scan rotated to start at a level-1 break-point.
     pub points: &'a ScanPoints,
@@ -91,6 +95,8 @@ pub struct LineDetector {
     lines: Vec<DetectedLine>,
     derivative_scratch: Vec<[f64; 2]>,
     split_stack: Vec<Range<usize>>,
+    noise: Option<RangeNoise>,
+    noise_scratch: NoiseScratch,
 }
 
 impl LineDetector {
@@ -108,6 +114,8 @@ impl LineDetector {
             lines: Vec::new(),
             derivative_scratch: Vec::new(),
             split_stack: Vec::new(),
+            noise: None,
+            noise_scratch: NoiseScratch::default(),
         })
     }
 
@@ -118,9 +126,19 @@ impl LineDetector {
 
     /// Detects the lines of one scan (paper section 2).
     pub fn detect(&mut self, scan: &Scan) -> Detection<'_> {
-        let seg = self.config.segmentation;
-        let fit = self.config.fitting;
         self.points.fill_from(scan, &mut self.table);
+        let mut config = self.config;
+        self.noise = None;
+        if let (Some(estimation), Some(nominal)) =
+            (self.config.noise_estimation, self.config.nominal_noise())
+        {
+            let noise =
+                estimate_range_noise(&self.points, &nominal, &estimation, &mut self.noise_scratch);
+            config = config.with_noise(noise);
+            self.noise = Some(noise);
+        }
+        let seg = config.segmentation;
+        let fit = config.fitting;
 
         // A closed scan is a ring: start reading it at a break-point so no
         // cluster crosses the seam; with no break at all, the merge bridges it.
@@ -227,6 +245,7 @@ impl LineDetector {
             level1_breaks: &self.level1_breaks,
             clusters: &self.clusters,
             sub_clusters: &self.sub_clusters,
+            noise: self.noise,
         }
     }
 }

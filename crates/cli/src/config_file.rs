@@ -14,18 +14,20 @@
 //! `pcaline eval --show-config NAME` prints a preset in this form with every
 //! field. An unknown key is an error naming it; an enum field (such as
 //! `detector.segmentation.level2`) is replaced whole when the file names
-//! another variant.
+//! another variant; an optional rule (such as `detector.noise_estimation` or
+//! `map.merge_gate`) is turned off by `false`.
 
 use crate::exit::BadInput;
 use anyhow::Result;
 use pcaline::mapping::MapConfig;
+use pcaline::segmentation::NoiseEstimation;
 use pcaline::{Config, RangeNoise};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use toml::Value;
 
 /// The presets a configuration may start from.
-pub const PRESETS: [&str; 4] = ["paper", "default", "split-and-merge", "told-sigma"];
+pub const PRESETS: [&str; 5] = ["paper", "default", "split-and-merge", "told-sigma", "estimated"];
 
 /// A detector and map configuration with the name it was given.
 #[derive(Debug, Clone, PartialEq)]
@@ -47,7 +49,8 @@ struct ConfigFile {
 }
 
 /// The preset `name`; `told-sigma` is the default detector told the range
-/// noise `sigma_m` (constant).
+/// noise `sigma_m` (constant); `estimated` the default estimating the noise
+/// from each scan.
 fn preset(name: &str, sigma_m: f64) -> Option<(Config, MapConfig)> {
     let map = MapConfig::default();
     Some(match name {
@@ -55,6 +58,7 @@ fn preset(name: &str, sigma_m: f64) -> Option<(Config, MapConfig)> {
         "default" => (Config::default(), map),
         "split-and-merge" => (Config::split_and_merge(), map),
         "told-sigma" => (Config::noise_aware(RangeNoise::constant(sigma_m.max(1e-3))), map),
+        "estimated" => (Config::default().with_noise_estimation(NoiseEstimation::standard()), map),
         _ => return None,
     })
 }
@@ -137,6 +141,11 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
     }
     for (key, value) in o {
         let here = if path.is_empty() { key.clone() } else { format!("{path}.{key}") };
+        // `false` turns an optional rule off.
+        if *value == Value::Boolean(false) && optional_field(&here) {
+            b.remove(key);
+            continue;
+        }
         match b.get_mut(key) {
             Some(slot) => merge(slot, value, &here)?,
             // Optional fields absent from the preset (`None`) may be set.
@@ -152,7 +161,8 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 6] = [
+    const OPTIONAL: [&str; 7] = [
+        "detector.noise_estimation",
         "detector.fitting.residual_test",
         "detector.fitting.orientation_test",
         "map.max_offset_m",
@@ -198,6 +208,11 @@ mod tests {
         assert_eq!(c.detector, expected);
         assert_eq!(c.map.max_offset_m, Some(0.2));
         assert_eq!(c.map.max_d_rho_m, MapConfig::default().max_d_rho_m);
+        // An optional rule turns off with `false`.
+        let path =
+            write("off.toml", "preset = \"default\"\n[detector]\nnoise_estimation = false\n");
+        let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
+        assert_eq!(c.detector, Config::noise_aware(RangeNoise::utm30lx()));
         // The paper's map has no offset gate; a file may add one.
         let path = write("paper.json", r#"{"preset": "paper", "map": {"max_offset_m": 0.1}}"#);
         assert_eq!(resolve(path.to_str().unwrap(), 0.01).unwrap().map.max_offset_m, Some(0.1));

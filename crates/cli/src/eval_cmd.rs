@@ -37,8 +37,9 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 60)]
     scans: usize,
     /// Configurations to evaluate, side by side (repeat): a preset (paper,
-    /// default, split-and-merge, told-sigma) or a TOML/JSON file naming a
-    /// preset and overriding fields (see --show-config). Default: all presets.
+    /// default, split-and-merge, told-sigma, estimated) or a TOML/JSON file
+    /// naming a preset and overriding fields (see --show-config). Default:
+    /// all presets.
     #[arg(long = "config")]
     configs: Vec<String>,
     /// Print a preset as a configuration file (every field) and exit.
@@ -52,7 +53,7 @@ pub struct EvalArgs {
     json: bool,
     /// Evaluate on real data instead: the MIT CSAIL log against its corrected
     /// poses, the relation metric on the Intel log, and per-line residuals of
-    /// the UTM-30LX-EW bag.
+    /// the UTM-30LX-EW bag (with the first --config, or the default).
     #[arg(long)]
     real: bool,
     /// Seed of the synthetic drift added to the Intel log's poses (for --real).
@@ -130,7 +131,9 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
             .clone()
             .or_else(|| std::env::var_os("PCALINE_DATA").map(Into::into))
             .unwrap_or_else(|| "../shared/data".into());
-        let report = crate::eval_real::evaluate(&data, args.drift_seed)?;
+        // The first configuration named, or the default.
+        let spec = args.configs.first().map_or("default", String::as_str);
+        let report = crate::eval_real::evaluate(&data, args.drift_seed, &resolve(spec, 0.01)?)?;
         if args.json {
             println!("{}", serde_json::to_string_pretty(&report)?);
         } else {
@@ -158,11 +161,11 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
         report.detection.extend(detection_rows(&scenes, args, sigma_mm, &configs)?);
     }
     if !args.no_localization {
-        // The scenes as shipped (their own sensor noise): `told-sigma` is
-        // told the UTM-30LX-EW's, which is `default`.
+        // The scenes as shipped (their own sensor noise, the UTM-30LX-EW's):
+        // `told-sigma` and `estimated` would be `default` again.
         let configs: Vec<NamedConfig> = specs
             .iter()
-            .filter(|s| s.as_str() != "told-sigma")
+            .filter(|s| !matches!(s.as_str(), "told-sigma" | "estimated"))
             .map(|s| resolve(s, 0.01))
             .collect::<Result<_>>()?;
         report.localization = localization_rows(&scenes, args.seeds, &configs, quiet)?;
@@ -480,6 +483,7 @@ fn print_detection(rows: &[Row], compare: bool) {
 }
 
 fn print_real(r: &crate::eval_real::RealReport) {
+    println!("configuration: {}", r.config);
     println!(
         "MIT CSAIL: {} scans with corrected poses; absolute errors after aligning at the first, relation metric between consecutive corrected scans",
         r.csail_pairs

@@ -5,9 +5,10 @@
 //! with a seeded synthetic drift, raw and aided; and the per-line residuals
 //! of the UTM-30LX-EW bag.
 
+use crate::config_file::NamedConfig;
 use anyhow::{Context, Result};
 use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
-use pcaline::{LineDetector, MapperConfig, Pose2};
+use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{RelationErrors, StampedTrajectory, aligned_trajectory_errors, relation_errors};
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
@@ -111,6 +112,8 @@ pub struct ResidualReport {
 /// Everything `pcaline eval --real` measures.
 #[derive(Debug, Serialize)]
 pub struct RealReport {
+    /// The detector and map configuration.
+    pub config: String,
     /// MIT CSAIL: scans with corrected poses.
     pub csail_pairs: usize,
     /// MIT CSAIL trajectories against the corrected poses (relations between
@@ -126,14 +129,15 @@ pub struct RealReport {
 }
 
 /// Runs every real-data measurement on the datasets folder `data`.
-pub fn evaluate(data: &Path, seed: u64) -> Result<RealReport> {
-    let (csail_pairs, csail) = csail(data)?;
+pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig) -> Result<RealReport> {
+    let (csail_pairs, csail) = csail(data, config)?;
     Ok(RealReport {
+        config: config.name.clone(),
         csail_pairs,
         csail,
-        intel: intel(data, seed)?,
+        intel: intel(data, seed, config)?,
         intel_drift_seed: seed,
-        utm: utm_residuals(&data.join("utm30lx-ros2"))?,
+        utm: utm_residuals(&data.join("utm30lx-ros2"), config.detector)?,
     })
 }
 
@@ -145,8 +149,7 @@ struct Loops {
 }
 
 impl Loops {
-    fn new() -> Result<Self> {
-        let config = MapperConfig::default();
+    fn new(config: &NamedConfig) -> Result<Self> {
         Ok(Loops {
             detector: LineDetector::new(config.detector)?,
             loops: modes()
@@ -166,10 +169,10 @@ impl Loops {
 }
 
 /// MIT CSAIL: raw and aided odometry at the scans with corrected poses.
-fn csail(data: &Path) -> Result<(usize, Vec<TrajectoryRow>)> {
+fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>)> {
     let dir = data.join("mit-csail");
     let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt"))?;
-    let mut loops = Loops::new()?;
+    let mut loops = Loops::new(config)?;
     let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); 3];
     for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
         let LogRecord::Scan(s) = record? else { continue };
@@ -222,7 +225,7 @@ struct IntelRecord {
 
 /// Intel: the relation metric of the log's own poses, and of the poses with
 /// the synthetic drift [`INTEL_DRIFT`] (seeded), raw and aided.
-fn intel(data: &Path, seed: u64) -> Result<Vec<TrajectoryRow>> {
+fn intel(data: &Path, seed: u64, config: &NamedConfig) -> Result<Vec<TrajectoryRow>> {
     let dir = data.join("intel");
     let relations = read_relations(&dir.join("intel.relations"))?;
     let options = CarmenOptions { time_offset_s: INTEL_TIME_OFFSET_S, ..CarmenOptions::default() };
@@ -254,7 +257,7 @@ fn intel(data: &Path, seed: u64) -> Result<Vec<TrajectoryRow>> {
     // Each mode's pose at every record: at a scan, its aiding loop's output;
     // between scans, the drifted odometry's motion since the last scan
     // composed onto it.
-    let mut loops = Loops::new()?;
+    let mut loops = Loops::new(config)?;
     let mut aided: Vec<Vec<Pose2>> = vec![Vec::new(); 3];
     let mut at_last_scan: Option<(Pose2, Vec<Pose2>)> = None;
     for (record, source) in records.iter().zip(&drifted) {
@@ -295,9 +298,9 @@ fn intel(data: &Path, seed: u64) -> Result<Vec<TrajectoryRow>> {
     Ok(rows)
 }
 
-/// Per-line residual std of the default detector on a real log.
-pub fn utm_residuals(log: &Path) -> Result<ResidualReport> {
-    let mut detector = LineDetector::new(pcaline::Config::default())?;
+/// Per-line residual std of the detector `config` on a real log.
+pub fn utm_residuals(log: &Path, config: pcaline::Config) -> Result<ResidualReport> {
+    let mut detector = LineDetector::new(config)?;
     let (mut residuals, mut points) = (Vec::new(), Vec::new());
     let scans = read_log(log, &LogOptions::default(), |record| {
         if let LogRecord::Scan(s) = record {

@@ -118,6 +118,31 @@ impl FitConfig {
         }
     }
 
+    /// The range noise of the first rule that uses one (merge, residual
+    /// test, orientation test).
+    pub fn noise(&self) -> Option<RangeNoise> {
+        match self.merge {
+            MergeRule::ResidualIncrease { noise, .. } => Some(noise),
+            MergeRule::Angles { .. } | MergeRule::Never => {
+                self.residual_test.map(|t| t.noise).or(self.orientation_test.map(|t| t.noise))
+            }
+        }
+    }
+
+    /// The same configuration with every noise-aware rule using `noise`.
+    pub fn with_noise(mut self, new: RangeNoise) -> Self {
+        if let MergeRule::ResidualIncrease { noise, .. } = &mut self.merge {
+            *noise = new;
+        }
+        if let Some(t) = &mut self.residual_test {
+            t.noise = new;
+        }
+        if let Some(t) = &mut self.orientation_test {
+            t.noise = new;
+        }
+        self
+    }
+
     /// Checks every value; an invalid one is a [`ConfigError`].
     pub fn validate(&self) -> Result<(), ConfigError> {
         ConfigError::check(self.eth > 1.0, "fitting.eth", self.eth, "must be > 1")?;

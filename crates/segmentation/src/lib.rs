@@ -27,10 +27,12 @@
 
 mod level1;
 mod level2;
+mod noise_estimate;
 mod split;
 
 pub use level1::{continues_line, is_break, level1_clusters, seam_start};
 pub use level2::{DerivativeSign, derivative_peak_split};
+pub use noise_estimate::{NoiseEstimation, NoiseScratch, estimate_range_noise};
 pub use split::split_at_farthest;
 
 use pcaline_geometry::{ConfigError, RangeNoise};
@@ -210,6 +212,26 @@ impl SegmentationConfig {
             min_cluster_points: 5,
             level2: Level2Rule::SplitAtFarthest { sigma_factor: 4.0, min_distance_m: 0.0, noise },
         }
+    }
+
+    /// The range noise of the first rule that uses one (level 1, then level 2).
+    pub fn noise(&self) -> Option<RangeNoise> {
+        match (self.level1, self.level2) {
+            (BreakRule::Adaptive { noise, .. }, _) => Some(noise),
+            (_, Level2Rule::SplitAtFarthest { noise, .. }) => Some(noise),
+            _ => None,
+        }
+    }
+
+    /// The same configuration with every noise-aware rule using `noise`.
+    pub fn with_noise(mut self, new: RangeNoise) -> Self {
+        if let BreakRule::Adaptive { noise, .. } = &mut self.level1 {
+            *noise = new;
+        }
+        if let Level2Rule::SplitAtFarthest { noise, .. } = &mut self.level2 {
+            *noise = new;
+        }
+        self
     }
 
     /// Checks every value; an invalid one is a [`ConfigError`].
