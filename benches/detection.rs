@@ -55,10 +55,10 @@ fn detection(c: &mut Criterion) {
     }
 
     let mut group = c.benchmark_group("detect_1081_beams");
-    let told = Config::noise_aware(RangeNoise::utm30lx());
+    let estimated = Config::default().with_noise_estimation(NoiseEstimation::standard());
     for (name, scan) in &scans {
         for (preset, config) in
-            [("default", Config::default()), ("told-noise", told), ("paper", Config::paper())]
+            [("default", Config::default()), ("estimated", estimated), ("paper", Config::paper())]
         {
             let mut det = LineDetector::new(config).unwrap();
             group.bench_with_input(BenchmarkId::new(preset, name), scan, |b, s| {

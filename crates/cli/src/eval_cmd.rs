@@ -7,12 +7,13 @@ use crate::config_file::{NamedConfig, PRESETS, resolve};
 use crate::exit::BadInput;
 use anyhow::{Context, Result};
 use pcaline::aiding::{AidingConfig, SensorLine};
-use pcaline::{LineDetector, LineSegment, Scan};
+use pcaline::{LineDetector, LineSegment};
 use pcaline_eval::{
     AidedRun, AidedScore, DetectFn, DetectionCriteria, DetectionEval, evaluate_detectors,
+    oracle_lines,
 };
 use pcaline_io::parse_scene;
-use pcaline_sim::{Scene, Simulator};
+use pcaline_sim::{Scene, SimFrame, Simulator};
 use serde::Serialize;
 use std::path::Path;
 
@@ -45,6 +46,11 @@ pub struct EvalArgs {
     /// Print a preset as a configuration file (every field) and exit.
     #[arg(long, value_name = "PRESET")]
     show_config: Option<String>,
+    /// Add two detection rows for a perfect segmentation (each true wall
+    /// fitted on its own points; all, and those known to 2°): the bound of
+    /// any detector that fits each wall on its own points.
+    #[arg(long)]
+    oracle: bool,
     /// Skip the mapping and localization runs (whole trajectories).
     #[arg(long)]
     no_localization: bool,
@@ -174,7 +180,7 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
-    print_detection(&report.detection, specs.len() == 2);
+    print_detection(&report.detection, specs.len() == 2 && !args.oracle);
     if !report.localization.is_empty() {
         print_localization(&report.localization, args.seeds);
     }
@@ -191,33 +197,41 @@ fn detection_rows(
 ) -> Result<Vec<Row>> {
     let mut detectors: Vec<LineDetector> =
         configs.iter().map(|c| LineDetector::new(c.detector)).collect::<Result<_, _>>()?;
+    let mut names: Vec<String> = configs.iter().map(|c| c.name.clone()).collect();
     let mut closures: Vec<Box<DetectFn<'_>>> = detectors
         .iter_mut()
         .map(|d| {
-            Box::new(move |s: &Scan| -> Vec<LineSegment> {
-                d.detect(s).lines.iter().map(|l| l.line).collect()
+            Box::new(move |f: &SimFrame| -> Vec<LineSegment> {
+                d.detect(&f.scan).lines.iter().map(|l| l.line).collect()
             }) as Box<DetectFn<'_>>
         })
         .collect();
+    let criteria = DetectionCriteria::default();
+    let sigma_m = sigma_mm / 1000.0;
+    if args.oracle {
+        // A perfect segmentation: every true wall fitted on its own points,
+        // all of them, and only those whose orientation is known to 2°.
+        for (name, max_std) in [("oracle", f64::INFINITY), ("oracle, std <= 2°", 2f64.to_radians())]
+        {
+            names.push(name.to_string());
+            closures
+                .push(Box::new(move |f: &SimFrame| oracle_lines(f, &criteria, sigma_m, max_std)));
+        }
+    }
     let mut refs: Vec<&mut DetectFn<'_>> = closures.iter_mut().map(|c| c.as_mut()).collect();
-    let eval = DetectionEval {
-        sigma_m: sigma_mm / 1000.0,
-        seeds: args.seeds,
-        scans: args.scans,
-        criteria: DetectionCriteria::default(),
-    };
+    let eval = DetectionEval { sigma_m, seeds: args.seeds, scans: args.scans, criteria };
     let results =
         evaluate_detectors(scenes, &eval, &mut refs).map_err(|e| BadInput(e.to_string()))?;
-    Ok(configs
-        .iter()
+    Ok(names
+        .into_iter()
         .zip(results)
-        .map(|(c, r)| {
+        .map(|(name, r)| {
             let s = &r.score;
             let (am, ar) = s.alpha_error();
             let (dm, dr) = s.d_error();
             Row {
                 sigma_mm,
-                config: c.name.clone(),
+                config: name,
                 scans: s.scans,
                 true_walls: s.true_walls,
                 recall: s.recall(),

@@ -234,13 +234,18 @@ fn eval_compares_two_configurations_side_by_side() {
         "1",
         "--scans",
         "4",
+        "--oracle",
         "--json",
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let detection = v["detection"].as_array().unwrap();
-    assert_eq!(detection.len(), 2);
+    assert_eq!(detection.len(), 4);
     assert_eq!(detection[1]["config"], s(&file));
+    // A perfect segmentation bounds the detectors' recall.
+    let recall = |k: usize| detection[k]["recall"].as_f64().unwrap();
+    assert_eq!(detection[2]["config"], "oracle");
+    assert!(recall(2) >= recall(0) && recall(2) >= recall(1), "{detection:?}");
     // Four aiding modes per configuration; full-pose aiding bounds the drift.
     let localization = v["localization"].as_array().unwrap();
     assert_eq!(localization.len(), 8);

@@ -22,7 +22,9 @@ mod reproduce;
 mod trajectory;
 
 pub use detection::{DetectionCriteria, DetectionScore, TrueWall, matches, true_walls};
-pub use detection_run::{DetectFn, DetectionEval, DetectorResult, evaluate_detectors};
+pub use detection_run::{
+    DetectFn, DetectionEval, DetectorResult, evaluate_detectors, oracle_lines,
+};
 pub use fit_accuracy::{FitAccuracy, RangeBearingAccuracy, fit_accuracy, range_bearing_accuracy};
 pub use localization::{AidedRun, AidedScore, MAP_MAX_ANGLE_DEG, MAP_TOLERANCE_M};
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
