@@ -117,7 +117,8 @@ impl Default for Config {
     /// peaks of noisy points split walls every few points, and eq. 7's 0.05°
     /// never merges noisy pieces. It does not estimate the noise from each
     /// scan ([`Config::with_noise_estimation`]): on the Intel log the estimate
-    /// loosened the thresholds and full-pose aiding drifted 25% more.
+    /// loosened the thresholds and full-pose aiding drifted over 50% more
+    /// (docs/accuracy.md).
     fn default() -> Self {
         Config::noise_aware(RangeNoise::utm30lx())
     }

@@ -84,6 +84,8 @@ struct Row {
     d_median_mm: f64,
     d_rms_mm: f64,
     time_per_scan_us: f64,
+    /// Recall of true walls under 0.5 m, 0.5-1 m, 1-2 m, 2 m and more.
+    recall_by_length: [f64; 4],
 }
 
 #[derive(Debug, Serialize)]
@@ -242,6 +244,7 @@ fn detection_rows(
                 d_median_mm: dm * 1e3,
                 d_rms_mm: dr * 1e3,
                 time_per_scan_us: r.time_per_scan_us,
+                recall_by_length: s.recall_by_length(),
             }
         })
         .collect())
@@ -471,6 +474,16 @@ fn print_detection(rows: &[Row], compare: bool) {
     };
     for r in rows {
         line(r);
+    }
+    println!();
+    println!("Recall by true wall length");
+    println!(
+        "{:>6}  {:<22} {:>9} {:>9} {:>9} {:>9}",
+        "sigma", "config", "< 0.5 m", "0.5-1 m", "1-2 m", ">= 2 m"
+    );
+    for r in rows {
+        let [a, b, c, d] = r.recall_by_length;
+        println!("{:>4}mm  {:<22} {a:>9.3} {b:>9.3} {c:>9.3} {d:>9.3}", r.sigma_mm, r.config);
     }
     if !compare {
         return;

@@ -110,7 +110,14 @@ pub struct DetectionScore {
     pub alpha_errors: Vec<f64>,
     /// Offsets of matching detections' centroids from the true line, metres.
     pub d_errors: Vec<f64>,
+    /// True walls and matched true walls by length, in the bins of
+    /// [`LENGTH_BINS_M`].
+    pub by_length: [(usize, usize); 4],
 }
+
+/// Upper ends of the wall-length bins of [`DetectionScore::by_length`],
+/// metres: under 0.5, 0.5-1, 1-2, 2 and more.
+pub const LENGTH_BINS_M: [f64; 4] = [0.5, 1.0, 2.0, f64::INFINITY];
 
 impl DetectionScore {
     /// Scores one scan's detections against its true walls.
@@ -143,6 +150,16 @@ impl DetectionScore {
             }
         }
         self.matched_walls += matched.iter().filter(|m| **m).count();
+        for (t, m) in truth.iter().zip(&matched) {
+            let bin = LENGTH_BINS_M.iter().position(|&hi| t.line.length() < hi).unwrap_or(3);
+            self.by_length[bin].0 += 1;
+            self.by_length[bin].1 += usize::from(*m);
+        }
+    }
+
+    /// Recall in each wall-length bin of [`LENGTH_BINS_M`] (NaN for an empty bin).
+    pub fn recall_by_length(&self) -> [f64; 4] {
+        self.by_length.map(|(walls, matched)| matched as f64 / walls as f64)
     }
 
     /// Matched true walls / true walls (1 when there are none).

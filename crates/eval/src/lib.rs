@@ -21,7 +21,9 @@ mod relation_metric;
 mod reproduce;
 mod trajectory;
 
-pub use detection::{DetectionCriteria, DetectionScore, TrueWall, matches, true_walls};
+pub use detection::{
+    DetectionCriteria, DetectionScore, LENGTH_BINS_M, TrueWall, matches, true_walls,
+};
 pub use detection_run::{
     DetectFn, DetectionEval, DetectorResult, evaluate_detectors, oracle_lines,
 };
