@@ -83,6 +83,8 @@ struct Row {
     alpha_rms_deg: f64,
     d_median_mm: f64,
     d_rms_mm: f64,
+    endpoint_median_mm: f64,
+    endpoint_rms_mm: f64,
     time_per_scan_us: f64,
     /// Recall of true walls under 0.5 m, 0.5-1 m, 1-2 m, 2 m and more.
     recall_by_length: [f64; 4],
@@ -231,6 +233,7 @@ fn detection_rows(
             let s = &r.score;
             let (am, ar) = s.alpha_error();
             let (dm, dr) = s.d_error();
+            let (em, er) = s.endpoint_error();
             Row {
                 sigma_mm,
                 config: name,
@@ -243,6 +246,8 @@ fn detection_rows(
                 alpha_rms_deg: ar.to_degrees(),
                 d_median_mm: dm * 1e3,
                 d_rms_mm: dr * 1e3,
+                endpoint_median_mm: em * 1e3,
+                endpoint_rms_mm: er * 1e3,
                 time_per_scan_us: r.time_per_scan_us,
                 recall_by_length: s.recall_by_length(),
             }
@@ -441,7 +446,7 @@ fn print_range_bearing() {
 
 fn print_detection(rows: &[Row], compare: bool) {
     println!(
-        "{:>6}  {:<22} {:>6} {:>6} {:>7} {:>6} {:>6} {:>9} {:>9} {:>8} {:>8} {:>9}",
+        "{:>6}  {:<22} {:>6} {:>6} {:>7} {:>6} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>9}",
         "sigma",
         "config",
         "scans",
@@ -453,11 +458,13 @@ fn print_detection(rows: &[Row], compare: bool) {
         "da rms",
         "|dd| med",
         "dd rms",
+        "end med",
+        "end rms",
         "us/scan"
     );
-    let line = |r: &Row| {
+    for r in rows {
         println!(
-            "{:>4}mm  {:<22} {:>6} {:>6} {:>7.3} {:>6.3} {:>6.2} {:>8.3}° {:>8.3}° {:>6.1}mm {:>6.1}mm {:>9.1}",
+            "{:>4}mm  {:<22} {:>6} {:>6} {:>7.3} {:>6.3} {:>6.2} {:>8.3}° {:>8.3}° {:>6.1}mm {:>6.1}mm {:>6.1}mm {:>6.1}mm {:>9.1}",
             r.sigma_mm,
             r.config,
             r.scans,
@@ -469,11 +476,33 @@ fn print_detection(rows: &[Row], compare: bool) {
             r.alpha_rms_deg,
             r.d_median_mm,
             r.d_rms_mm,
+            r.endpoint_median_mm,
+            r.endpoint_rms_mm,
             r.time_per_scan_us
         );
-    };
-    for r in rows {
-        line(r);
+    }
+    if compare {
+        // Two configurations: the second minus the first, per noise level.
+        for pair in rows.chunks(2) {
+            let [a, b] = pair else { continue };
+            println!(
+                "{:>4}mm  {:<22} {:>6} {:>6} {:>+7.3} {:>+6.3} {:>+6.2} {:>+8.3}° {:>+8.3}° {:>+6.1}mm {:>+6.1}mm {:>+6.1}mm {:>+6.1}mm {:>+9.1}",
+                a.sigma_mm,
+                "second - first",
+                "",
+                "",
+                b.recall - a.recall,
+                b.false_positive_fraction - a.false_positive_fraction,
+                b.fragmentation - a.fragmentation,
+                b.alpha_median_deg - a.alpha_median_deg,
+                b.alpha_rms_deg - a.alpha_rms_deg,
+                b.d_median_mm - a.d_median_mm,
+                b.d_rms_mm - a.d_rms_mm,
+                b.endpoint_median_mm - a.endpoint_median_mm,
+                b.endpoint_rms_mm - a.endpoint_rms_mm,
+                b.time_per_scan_us - a.time_per_scan_us
+            );
+        }
     }
     println!();
     println!("Recall by true wall length");
@@ -484,28 +513,6 @@ fn print_detection(rows: &[Row], compare: bool) {
     for r in rows {
         let [a, b, c, d] = r.recall_by_length;
         println!("{:>4}mm  {:<22} {a:>9.3} {b:>9.3} {c:>9.3} {d:>9.3}", r.sigma_mm, r.config);
-    }
-    if !compare {
-        return;
-    }
-    // Two configurations: the second minus the first, per noise level.
-    for pair in rows.chunks(2) {
-        let [a, b] = pair else { continue };
-        println!(
-            "{:>4}mm  {:<22} {:>6} {:>6} {:>+7.3} {:>+6.3} {:>+6.2} {:>+8.3}° {:>+8.3}° {:>+6.1}mm {:>+6.1}mm {:>+9.1}",
-            a.sigma_mm,
-            "second - first",
-            "",
-            "",
-            b.recall - a.recall,
-            b.false_positive_fraction - a.false_positive_fraction,
-            b.fragmentation - a.fragmentation,
-            b.alpha_median_deg - a.alpha_median_deg,
-            b.alpha_rms_deg - a.alpha_rms_deg,
-            b.d_median_mm - a.d_median_mm,
-            b.d_rms_mm - a.d_rms_mm,
-            b.time_per_scan_us - a.time_per_scan_us
-        );
     }
 }
 

@@ -110,6 +110,11 @@ pub struct DetectionScore {
     pub alpha_errors: Vec<f64>,
     /// Offsets of matching detections' centroids from the true line, metres.
     pub d_errors: Vec<f64>,
+    /// Distances of matching detections' endpoints from the true visible
+    /// wall's endpoints (paired in the order with the smaller sum), metres:
+    /// two per matching detection. A wall found in pieces has large
+    /// endpoint errors at the cuts.
+    pub endpoint_errors: Vec<f64>,
     /// True walls and matched true walls by length, in the bins of
     /// [`LENGTH_BINS_M`].
     pub by_length: [(usize, usize); 4],
@@ -145,6 +150,15 @@ impl DetectionScore {
                     self.matching_detections += 1;
                     self.alpha_errors.push(line_angle_diff(d.alpha, t.line.alpha));
                     self.d_errors.push(t.line.signed_distance(&d.centroid));
+                    let (a, b) = (t.line.start, t.line.end);
+                    let straight = (d.start - a).norm() + (d.end - b).norm();
+                    let crossed = (d.start - b).norm() + (d.end - a).norm();
+                    let (e0, e1) = if straight <= crossed {
+                        ((d.start - a).norm(), (d.end - b).norm())
+                    } else {
+                        ((d.start - b).norm(), (d.end - a).norm())
+                    };
+                    self.endpoint_errors.extend([e0, e1]);
                 }
                 None => self.false_positives += 1,
             }
@@ -194,6 +208,11 @@ impl DetectionScore {
     pub fn d_error(&self) -> (f64, f64) {
         median_rms(&self.d_errors)
     }
+
+    /// Median and rms of the endpoint errors, metres.
+    pub fn endpoint_error(&self) -> (f64, f64) {
+        median_rms(&self.endpoint_errors)
+    }
 }
 
 fn median_rms(v: &[f64]) -> (f64, f64) {
@@ -230,6 +249,7 @@ mod tests {
         s.add_scan(&truth(), &det, &DetectionCriteria::default());
         assert_eq!((s.recall(), s.false_positive_fraction(), s.fragmentation()), (1.0, 0.0, 1.0));
         assert!(s.alpha_error().1 < 1e-12 && s.d_error().1 < 1e-12);
+        assert!(s.endpoint_error().1 < 1e-12 && s.endpoint_errors.len() == 4);
     }
 
     #[test]
@@ -240,6 +260,12 @@ mod tests {
         assert_eq!(s.recall(), 1.0);
         assert_eq!(s.false_positive_fraction(), 0.0);
         assert_eq!(s.fragmentation(), 1.5);
+        // The cut shows in the endpoint errors: the inner endpoints lie 2 m and
+        // 2.05 m from the true ends they pair with; the outer ones are exact.
+        let mut e = s.endpoint_errors.clone();
+        e.sort_by(f64::total_cmp);
+        assert!(e[..4].iter().all(|v| *v < 1e-12), "{e:?}");
+        assert!((e[4] - 2.0).abs() < 1e-9 && (e[5] - 2.05).abs() < 1e-9, "{e:?}");
     }
 
     #[test]
