@@ -263,7 +263,9 @@ proptest! {
     fn arbitrary_ranges_never_panic(ranges in prop::collection::vec(any_range(), 0..1200),
                                     angle_min in -4.0f32..4.0, inc in -0.02f32..0.02) {
         let scan = Scan::new(angle_min, inc, 0.1, 30.0, ranges);
-        for config in [Config::paper(), Config::default()] {
+        let estimated = Config::default()
+            .with_noise_estimation(pcaline::segmentation::NoiseEstimation::standard());
+        for config in [Config::paper(), Config::default(), estimated] {
             let mut det = LineDetector::new(config).unwrap();
             let d = det.detect(&scan);
             for l in d.lines {
@@ -279,8 +281,16 @@ proptest! {
         for (i, r) in corrupt {
             scan.ranges[i] = r;
         }
-        let mut det = LineDetector::new(Config::default()).unwrap();
-        let _ = det.detect(&scan);
+        let estimated = Config::default()
+            .with_noise_estimation(pcaline::segmentation::NoiseEstimation::standard());
+        for config in [Config::default(), estimated] {
+            let mut det = LineDetector::new(config).unwrap();
+            let d = det.detect(&scan);
+            // An estimate, when made, stays within its bounds of the nominal.
+            if let Some(n) = d.noise {
+                prop_assert!(n.near_sigma_m >= 0.01 && n.near_sigma_m <= 0.04, "{n:?}");
+            }
+        }
     }
 
     #[test]
