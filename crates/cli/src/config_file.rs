@@ -19,6 +19,7 @@
 
 use crate::exit::BadInput;
 use anyhow::Result;
+use pcaline::aiding::AidingConfig;
 use pcaline::mapping::MapConfig;
 use pcaline::segmentation::NoiseEstimation;
 use pcaline::{Config, RangeNoise};
@@ -34,10 +35,20 @@ pub const PRESETS: [&str; 5] = ["paper", "default", "split-and-merge", "told-sig
 pub struct NamedConfig {
     /// The preset name or the file's path.
     pub name: String,
+    /// The preset it starts from.
+    pub preset: String,
     /// The detector.
     pub detector: Config,
     /// The line map.
     pub map: MapConfig,
+}
+
+impl NamedConfig {
+    /// The heading aiding that goes with the configuration: the paper's
+    /// eq. 11-14 for the paper preset, inverse-variance weights otherwise.
+    pub fn heading_aiding(&self) -> AidingConfig {
+        if self.preset == "paper" { AidingConfig::paper() } else { AidingConfig::heading() }
+    }
 }
 
 /// The form of a configuration file.
@@ -67,7 +78,7 @@ fn preset(name: &str, sigma_m: f64) -> Option<(Config, MapConfig)> {
 /// file. `sigma_m` is the range noise `told-sigma` is told.
 pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
     if let Some((detector, map)) = preset(spec, sigma_m) {
-        return Ok(NamedConfig { name: spec.to_string(), detector, map });
+        return Ok(NamedConfig { name: spec.to_string(), preset: spec.to_string(), detector, map });
     }
     let path = Path::new(spec);
     if !path.exists() {
@@ -111,7 +122,12 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
         .validate()
         .and_then(|()| file.map.validate())
         .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
-    Ok(NamedConfig { name: spec.to_string(), detector: file.detector, map: file.map })
+    Ok(NamedConfig {
+        name: spec.to_string(),
+        preset: base_name.to_string(),
+        detector: file.detector,
+        map: file.map,
+    })
 }
 
 /// The preset `name` as a configuration file (TOML), every field written.

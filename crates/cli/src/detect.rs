@@ -1,9 +1,9 @@
 //! `pcaline detect FILE`: the lines of every scan of a log or scan file.
 
+use crate::config_file::resolve;
 use crate::exit::BadInput;
 use crate::log_args::LogArgs;
 use crate::progress;
-use crate::run::Preset;
 use anyhow::Result;
 use pcaline::LineDetector;
 use pcaline_io::{
@@ -19,9 +19,10 @@ pub struct DetectArgs {
     file: PathBuf,
     #[command(flatten)]
     log: LogArgs,
-    /// Detector preset.
-    #[arg(long, value_enum, default_value_t = Preset::Default)]
-    config: Preset,
+    /// Detector: a preset (default, paper, split-and-merge, told-sigma,
+    /// estimated) or a configuration file (see `pcaline eval --show-config`).
+    #[arg(long, default_value = "default")]
+    config: String,
     /// Write CSV (one line per detected line) instead of JSON.
     #[arg(long)]
     csv: bool,
@@ -35,7 +36,7 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     if !args.file.exists() {
         return Err(BadInput(format!("{}: no such file or folder", args.file.display())).into());
     }
-    let mut detector = LineDetector::new(args.config.mapper().detector)?;
+    let mut detector = LineDetector::new(resolve(&args.config, 0.01)?.detector)?;
     let bar = progress::spinner("scans", quiet);
     let mut out: Vec<ScanLines> = Vec::new();
     let mut scan_index = 0;

@@ -4,7 +4,6 @@
 use crate::exit::BadInput;
 use crate::log_args::LogArgs;
 use crate::picture::write_picture;
-use crate::run::Preset;
 use crate::svg::Plot;
 use anyhow::Result;
 use clap::Subcommand;
@@ -130,9 +129,9 @@ pub struct ScanArgs {
     /// Which scan, from 0.
     #[arg(long, default_value_t = 0)]
     index: usize,
-    /// Detector preset.
-    #[arg(long, value_enum, default_value_t = Preset::Default)]
-    config: Preset,
+    /// Detector: a preset or a configuration file (as `pcaline detect`).
+    #[arg(long, default_value = "default")]
+    config: String,
     /// Output picture: SVG, or PNG when the name ends in `.png`.
     #[arg(short, long)]
     output: PathBuf,
@@ -179,7 +178,8 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
         ))
         .into());
     };
-    let mut detector = LineDetector::new(args.config.mapper().detector)?;
+    let mut detector =
+        LineDetector::new(crate::config_file::resolve(&args.config, 0.01)?.detector)?;
     let d = detector.detect(&scan);
     let pts: Vec<[f64; 2]> = d.points.xy.iter().map(|p| [p.x, p.y]).collect();
     let (mut lo, mut hi) = ([0.0f64; 2], [0.0f64; 2]); // include the sensor

@@ -5,7 +5,6 @@ use crate::exit::BadInput;
 use crate::log_args::LogArgs;
 use crate::picture::write_svg_and_png;
 use crate::progress;
-use crate::run::Preset;
 use crate::svg::Plot;
 use anyhow::Result;
 use clap::ValueEnum;
@@ -34,9 +33,9 @@ pub struct MapArgs {
     log: PathBuf,
     #[command(flatten)]
     input: LogArgs,
-    /// Preset of detector and map.
-    #[arg(long, value_enum, default_value_t = Preset::Default)]
-    config: Preset,
+    /// Detector and map: a preset or a configuration file (as `pcaline detect`).
+    #[arg(long, default_value = "default")]
+    config: String,
     /// Aiding.
     #[arg(long, value_enum, default_value_t = AidingArg::Full)]
     aiding: AidingArg,
@@ -64,14 +63,14 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     if !args.log.exists() {
         return Err(BadInput(format!("{}: no such file or folder", args.log.display())).into());
     }
-    let mapper = args.config.mapper();
+    let config = crate::config_file::resolve(&args.config, 0.01)?;
     let aiding_config = match args.aiding {
         AidingArg::None => AidingConfig::none(),
-        AidingArg::Heading => args.config.heading_aiding(),
+        AidingArg::Heading => config.heading_aiding(),
         AidingArg::Full => AidingConfig::full_pose(),
     };
-    let mut detector = LineDetector::new(mapper.detector)?;
-    let mut aiding = Aiding::new(aiding_config, mapper.map)?;
+    let mut detector = LineDetector::new(config.detector)?;
+    let mut aiding = Aiding::new(aiding_config, config.map)?;
     let bar = progress::spinner("scans", quiet);
     let mut poses: Vec<PoseOut> = Vec::new();
     let mut lines: Vec<SensorLine> = Vec::new();

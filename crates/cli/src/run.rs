@@ -11,7 +11,7 @@ use crate::scene_cmd::draw_scene;
 use crate::svg::Plot;
 use anyhow::{Context, Result};
 use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
-use pcaline::{LineDetector, LineSegment, MapperConfig, Pose2};
+use pcaline::{LineDetector, LineSegment, Pose2};
 use pcaline_eval::{MapQuality, TrajectoryErrors, VisibleWalls, map_quality, trajectory_errors};
 use pcaline_io::{LineRecord, parse_scene, read_scene, write_json, write_map_csv, write_map_json};
 use pcaline_sim::{Scene, Simulator};
@@ -31,9 +31,11 @@ pub struct RunArgs {
     /// Random seed of the simulation.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Preset of detector, map and aiding.
-    #[arg(long, value_enum, default_value_t = Preset::Default)]
-    config: Preset,
+    /// Detector and map: a preset (default, paper, split-and-merge,
+    /// told-sigma, estimated) or a configuration file (see `pcaline eval
+    /// --show-config`); the paper preset also brings the paper's heading aiding.
+    #[arg(long, default_value = "default")]
+    config: String,
     /// Output folder for pictures and JSON.
     #[arg(long, default_value = "out/run")]
     out: PathBuf,
@@ -43,33 +45,6 @@ pub struct RunArgs {
     /// Also write each picture as PNG.
     #[arg(long)]
     png: bool,
-}
-
-/// Presets.
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum Preset {
-    /// Noise-aware detector, refining map; heading aiding with inverse-variance weights.
-    Default,
-    /// The paper throughout: detector, map (eq. 8-10) and aiding (eq. 11-14).
-    Paper,
-}
-
-impl Preset {
-    /// Detector, map and aiding of the preset.
-    pub fn mapper(self) -> MapperConfig {
-        match self {
-            Preset::Default => MapperConfig::default(),
-            Preset::Paper => MapperConfig::paper(),
-        }
-    }
-
-    /// The heading aiding of the preset.
-    pub fn heading_aiding(self) -> AidingConfig {
-        match self {
-            Preset::Default => AidingConfig::heading(),
-            Preset::Paper => AidingConfig::paper(),
-        }
-    }
 }
 
 /// The three loops compared.
@@ -135,10 +110,9 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let (scene, scene_name) = load(&args.scene)?;
     let sim =
         Simulator::new(&scene, args.seed).map_err(|e| BadInput(format!("{scene_name}: {e}")))?;
-    let config = args.config.mapper();
+    let config = crate::config_file::resolve(&args.config, 0.01)?;
     let mut detector = LineDetector::new(config.detector)?;
-    let aiding_configs =
-        [AidingConfig::none(), args.config.heading_aiding(), AidingConfig::full_pose()];
+    let aiding_configs = [AidingConfig::none(), config.heading_aiding(), AidingConfig::full_pose()];
     let mut loops = aiding_configs
         .iter()
         .map(|a| Aiding::new(*a, config.map))
@@ -232,7 +206,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let summary = Summary {
         scene: scene_name,
         seed: args.seed,
-        preset: format!("{:?}", args.config).to_lowercase(),
+        preset: config.name.clone(),
         scans,
         duration_s: scans as f64 / sim.sensor().rate_hz,
         lines_per_scan_mean: line_count as f64 / scans.max(1) as f64,

@@ -261,3 +261,39 @@ fn eval_compares_two_configurations_side_by_side() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("eth20.toml") && err.contains("detector.fitting.etha"), "{err}");
 }
+
+#[test]
+fn detect_takes_a_configuration_file_and_rejects_an_unknown_preset() {
+    // One scan: a wall 2 m ahead, 241 beams.
+    let scan = tmp("wall.json");
+    let ranges: Vec<String> = (0..241)
+        .map(|i| {
+            let b = -0.5236f64 + i as f64 * 0.25f64.to_radians();
+            format!("{:.4}", 2.0 / b.cos())
+        })
+        .collect();
+    std::fs::write(
+        &scan,
+        format!(
+            "{{\"angle_min\": -0.5236, \"angle_increment\": {}, \"range_min\": 0.1, \"range_max\": 30.0, \"ranges\": [{}]}}",
+            0.25f64.to_radians(),
+            ranges.join(",")
+        ),
+    )
+    .unwrap();
+    let config = tmp("long-lines.toml");
+    // Report only lines of 3 m or more: the 1.15 m wall is not.
+    std::fs::write(&config, "preset = \"default\"\n[detector.fitting]\nmin_line_length_m = 3.0\n")
+        .unwrap();
+    let count = |args: &[&str]| -> usize {
+        let out = pcaline(args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v[0]["lines"].as_array().unwrap().len()
+    };
+    assert_eq!(count(&["--quiet", "detect", s(&scan)]), 1);
+    assert_eq!(count(&["--quiet", "detect", s(&scan), "--config", s(&config)]), 0);
+    let out = pcaline(&["--quiet", "detect", s(&scan), "--config", "best"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("neither a preset"));
+}

@@ -87,14 +87,21 @@ impl ScanPoints {
             return;
         }
         table.update(scan);
-        for (i, &r) in scan.ranges.iter().enumerate() {
+        let n = scan.ranges.len();
+        self.xy.reserve(n);
+        self.range_m.reserve(n);
+        self.angle_rad.reserve(n);
+        self.beam.reserve(n);
+        // Zipped iterators: no bounds checks in the loop.
+        let bearings = table.cos.iter().zip(&table.sin).zip(&table.angles);
+        for (i, (&r, ((&c, &s), &a))) in scan.ranges.iter().zip(bearings).enumerate() {
             if !scan.is_valid_range(r) {
                 continue;
             }
             let r = f64::from(r);
-            self.xy.push(Point2::new(r * table.cos[i], r * table.sin[i]));
+            self.xy.push(Point2::new(r * c, r * s));
             self.range_m.push(r);
-            self.angle_rad.push(table.angles[i]);
+            self.angle_rad.push(a);
             self.beam.push(i as u32);
         }
     }
