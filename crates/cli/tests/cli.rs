@@ -268,14 +268,14 @@ fn detect_takes_a_configuration_file_and_rejects_an_unknown_preset() {
     let scan = tmp("wall.json");
     let ranges: Vec<String> = (0..241)
         .map(|i| {
-            let b = -0.5236f64 + i as f64 * 0.25f64.to_radians();
+            let b = -0.52f64 + i as f64 * 0.25f64.to_radians();
             format!("{:.4}", 2.0 / b.cos())
         })
         .collect();
     std::fs::write(
         &scan,
         format!(
-            "{{\"angle_min\": -0.5236, \"angle_increment\": {}, \"range_min\": 0.1, \"range_max\": 30.0, \"ranges\": [{}]}}",
+            "{{\"angle_min\": -0.52, \"angle_increment\": {}, \"range_min\": 0.1, \"range_max\": 30.0, \"ranges\": [{}]}}",
             0.25f64.to_radians(),
             ranges.join(",")
         ),
