@@ -3,7 +3,7 @@
 
 use crate::Config;
 use pcaline_fitting::{
-    Moments, Piece, is_elongated, line_from_moments, merge_adjacent, refine_boundaries,
+    Moments, Piece, is_elongated, line_from_eigen, merge_adjacent, refine_boundaries,
 };
 use pcaline_geometry::{BearingTable, ConfigError, LineSegment, RangeNoise, Scan, ScanPoints};
 use pcaline_segmentation::{
@@ -221,12 +221,12 @@ impl LineDetector {
         for piece in &self.pieces {
             let first = self.points.xy[piece.first];
             let last = self.points.xy[piece.last];
-            if let Some(line) = line_from_moments(&piece.moments, &first, &last)
+            // One eigen decomposition serves the fit and the orientation test.
+            let eigen = piece.moments.eigen();
+            if let Some(line) = line_from_eigen(&piece.moments, &eigen, &first, &last)
                 && line.n_points >= fit.min_line_points
                 && line.length() >= fit.min_line_length_m
-                && fit
-                    .orientation_test
-                    .is_none_or(|t| t.accepts(&piece.moments, &piece.moments.eigen()))
+                && fit.orientation_test.is_none_or(|t| t.accepts(&piece.moments, &eigen))
             {
                 self.lines.push(DetectedLine {
                     line,

@@ -12,7 +12,7 @@ use crate::svg::Plot;
 use anyhow::{Context, Result};
 use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
 use pcaline::{LineDetector, LineSegment, Pose2};
-use pcaline_eval::{MapQuality, TrajectoryErrors, VisibleWalls, map_quality, trajectory_errors};
+use pcaline_eval::{AidedRun, AidedScore};
 use pcaline_io::{LineRecord, parse_scene, read_scene, write_json, write_map_csv, write_map_json};
 use pcaline_sim::{Scene, Simulator};
 use serde::Serialize;
@@ -113,60 +113,53 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let config = crate::config_file::resolve(&args.config, 0.01)?;
     let mut detector = LineDetector::new(config.detector)?;
     let aiding_configs = [AidingConfig::none(), config.heading_aiding(), AidingConfig::full_pose()];
-    let mut loops = aiding_configs
-        .iter()
-        .map(|a| Aiding::new(*a, config.map))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut visible = VisibleWalls::new(sim.world().walls(), 0.05);
 
     let bar = progress::bar(sim.len() as u64, "scans", quiet);
     let mut records = Vec::with_capacity(sim.len());
-    let mut estimates: [Vec<Pose2>; 3] = Default::default();
     let mut residuals = Vec::new();
     let mut line_count = 0usize;
     let mut detect_time = 0.0;
     let mut drawn: Vec<LineSegment> = Vec::new();
-    let mut sensor_lines: Vec<SensorLine> = Vec::new();
-    for frame in sim.frames() {
+    let run = AidedRun::run(&sim, config.map, &aiding_configs, |frame| {
         let t0 = Instant::now();
         let detection = detector.detect(&frame.scan);
         detect_time += t0.elapsed().as_secs_f64();
-        sensor_lines.clear();
-        sensor_lines.extend(detection.lines.iter().map(SensorLine::from));
-        let line_records: Vec<LineRecord> = detection
-            .lines
-            .iter()
-            .map(|l| LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))))
-            .collect();
+        let sensor_lines: Vec<SensorLine> = detection.lines.iter().map(SensorLine::from).collect();
         line_count += sensor_lines.len();
         residuals.extend(sensor_lines.iter().map(|l| l.line.residual_std));
         if frame.index % 20 == 0 {
             drawn.extend(sensor_lines.iter().map(|l| l.line.transformed(&frame.true_pose)));
         }
-        for (aiding, est) in loops.iter_mut().zip(estimates.iter_mut()) {
-            let (pose, _) = aiding.step(&frame.odometry_pose, &sensor_lines);
-            est.push(pose);
-        }
-        visible.observe(&frame);
         records.push(ScanRecord {
             index: frame.index,
             time_s: frame.time_s,
             true_pose: pose_array(&frame.true_pose),
             odometry_pose: pose_array(&frame.odometry_pose),
-            heading_aided_pose: pose_array(&estimates[1][frame.index]),
-            full_pose_aided_pose: pose_array(&estimates[2][frame.index]),
-            lines: line_records,
+            // Filled in from the loops' estimates once the run is over.
+            heading_aided_pose: [f64::NAN; 3],
+            full_pose_aided_pose: [f64::NAN; 3],
+            lines: detection
+                .lines
+                .iter()
+                .map(|l| LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))))
+                .collect(),
         });
         bar.inc(1);
-    }
+        sensor_lines
+    })?;
     bar.finish_and_clear();
+    let estimates = &run.estimates;
+    for (k, record) in records.iter_mut().enumerate() {
+        record.heading_aided_pose = pose_array(&estimates[1][k]);
+        record.full_pose_aided_pose = pose_array(&estimates[2][k]);
+    }
+    let full = &run.loops[2];
 
-    let mut modes = Vec::new();
-    for ((mode, aiding), est) in MODES.iter().zip(&loops).zip(&estimates) {
-        let e: TrajectoryErrors =
-            trajectory_errors(est, sim.true_poses()).context("the scene has no scans")?;
-        let q: MapQuality = map_quality(aiding.map().lines(), &visible, 0.05, 2f64.to_radians());
-        modes.push(ModeSummary {
+    let scores = run.scores(sim.true_poses()).context("the scene has no scans")?;
+    let modes: Vec<ModeSummary> = MODES
+        .iter()
+        .zip(&scores)
+        .map(|(mode, AidedScore { errors: e, map: q })| ModeSummary {
             mode,
             heading_rms_deg: e.heading_rms_rad.to_degrees(),
             heading_max_deg: e.heading_max_rad.to_degrees(),
@@ -176,8 +169,8 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
             map_worst_line_m: q.line_errors_m.iter().copied().fold(0.0, f64::max),
             map_lines_off_wall: q.spurious,
             map_covered_fraction: q.covered_fraction,
-        });
-    }
+        })
+        .collect();
 
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating output folder {}", args.out.display()))?;
@@ -186,14 +179,14 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     write_json(&scans_path, &records)?;
     outputs.push(scans_path.display().to_string());
     let (map_json, map_csv) = (args.out.join("map.json"), args.out.join("map.csv"));
-    write_map_json(&map_json, loops[2].map())?;
-    write_map_csv(&map_csv, loops[2].map())?;
+    write_map_json(&map_json, full.map())?;
+    write_map_csv(&map_csv, full.map())?;
     outputs.extend([map_json.display().to_string(), map_csv.display().to_string()]);
     let pictures = [
         ("detections", draw_detections(&scene, &sim, &drawn)),
-        ("map", draw_map(&scene, &sim, &loops[2], &estimates)),
-        ("heading", draw_heading(&sim, &estimates)),
-        ("heading-error", draw_heading_error(&sim, &estimates)),
+        ("map", draw_map(&scene, &sim, full, estimates)),
+        ("heading", draw_heading(&sim, estimates)),
+        ("heading-error", draw_heading_error(&sim, estimates)),
     ];
     for (name, svg) in &pictures {
         for p in write_svg_and_png(&args.out, name, svg, args.png)? {
@@ -236,7 +229,7 @@ fn draw_detections(scene: &Scene, sim: &Simulator, drawn: &[LineSegment]) -> Str
 }
 
 /// The paper's Figure 10: the line map over the true walls, with trajectories.
-fn draw_map(scene: &Scene, sim: &Simulator, full: &Aiding, est: &[Vec<Pose2>; 3]) -> String {
+fn draw_map(scene: &Scene, sim: &Simulator, full: &Aiding, est: &[Vec<Pose2>]) -> String {
     let (lo, hi) = scene.bounds();
     let mut plot = Plot::new([lo.x, lo.y], [hi.x, hi.y], 1000.0);
     for w in sim.world().walls() {
@@ -261,7 +254,7 @@ fn draw_map(scene: &Scene, sim: &Simulator, full: &Aiding, est: &[Vec<Pose2>; 3]
 }
 
 /// The paper's Figure 11: heading over time with and without aiding.
-fn draw_heading(sim: &Simulator, est: &[Vec<Pose2>; 3]) -> String {
+fn draw_heading(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
     let dt = 1.0 / sim.sensor().rate_hz;
     // Unwrapped headings in degrees, so turns do not jump at ±180°.
     let series = |poses: &[Pose2]| {
@@ -298,7 +291,7 @@ fn draw_heading(sim: &Simulator, est: &[Vec<Pose2>; 3]) -> String {
 }
 
 /// Heading error over time, with and without aiding.
-fn draw_heading_error(sim: &Simulator, est: &[Vec<Pose2>; 3]) -> String {
+fn draw_heading_error(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
     let dt = 1.0 / sim.sensor().rate_hz;
     let truth = sim.true_poses();
     let error = |poses: &[Pose2]| -> Vec<[f64; 2]> {

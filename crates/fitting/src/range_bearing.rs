@@ -40,6 +40,11 @@ pub fn point_covariance(
     j * noise * j.transpose()
 }
 
+/// The variance across a line with unit normal `n` of a point with covariance `c`.
+fn var_across(n: &Vector2<f64>, c: &Matrix2<f64>) -> f64 {
+    (n.transpose() * c * n)[(0, 0)]
+}
+
 /// The information sums of `line` for `points` with covariances
 /// `covariances`: `(Σ g gᵀ w_a, Σ g gᵀ w_b)` for the weight pairs `weights`.
 fn sums(
@@ -52,7 +57,7 @@ fn sums(
     let tangent = Vector2::new(-n.y, n.x);
     let (mut a, mut b) = (Matrix2::zeros(), Matrix2::zeros());
     for (p, c) in points.iter().zip(covariances) {
-        let var_perp = (n.transpose() * c * n)[(0, 0)];
+        let var_perp = var_across(&n, c);
         let g = Vector2::new(tangent.dot(&p.coords), -1.0);
         let (wa, wb) = weights(var_perp);
         let ggt = g * g.transpose();
@@ -99,8 +104,7 @@ pub fn fit_weighted(
     let (first, last) = (points[0], points[points.len() - 1]);
     for _ in 0..iterations.max(1) {
         let n = line.normal();
-        let weights: Vec<f64> =
-            covariances.iter().map(|c| 1.0 / (n.transpose() * c * n)[(0, 0)]).collect();
+        let weights: Vec<f64> = covariances.iter().map(|c| 1.0 / var_across(&n, c)).collect();
         if weights.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
             return None;
         }
@@ -127,7 +131,7 @@ pub fn fit_weighted(
     let n = line.normal();
     let (mut r2, mut wsum) = (0.0, 0.0);
     for (p, c) in points.iter().zip(covariances) {
-        let w = 1.0 / (n.transpose() * c * n)[(0, 0)];
+        let w = 1.0 / var_across(&n, c);
         r2 += w * (n.dot(&p.coords) - line.d).powi(2);
         wsum += w;
     }
