@@ -10,7 +10,7 @@ pub enum ConfigError {
     #[error("invalid configuration: `{field}` = {value} {requirement}")]
     OutOfRange {
         /// The configuration field, as a dotted path (`fitting.eth`).
-        field: &'static str,
+        field: std::borrow::Cow<'static, str>,
         /// The offending value.
         value: f64,
         /// What the value must satisfy ("must be > 1").
@@ -29,6 +29,24 @@ impl ConfigError {
         if ok && !value.is_nan() {
             Ok(())
         } else {
+            Err(ConfigError::OutOfRange { field: field.into(), value, requirement })
+        }
+    }
+
+    /// As [`ConfigError::check`], for the field `name` of a section whose
+    /// path is `prefix` (the error names `prefix.name`): a type used in
+    /// several places names the place it was used.
+    pub fn check_field(
+        ok: bool,
+        prefix: &str,
+        name: &str,
+        value: f64,
+        requirement: &'static str,
+    ) -> Result<(), ConfigError> {
+        if ok && !value.is_nan() {
+            Ok(())
+        } else {
+            let field = format!("{prefix}.{name}").into();
             Err(ConfigError::OutOfRange { field, value, requirement })
         }
     }

@@ -1,22 +1,27 @@
 //! A uniform grid over segment extents: the spatial index that keeps matching
-//! cost independent of the size of the map.
+//! cost independent of the size of the map. Each segment remembers the cells
+//! it is registered in, so it can be removed or renumbered exactly.
 
 use pcaline_geometry::Point2;
 use std::collections::HashMap;
+
+type Key = (i32, i32);
 
 /// Cells of `cell_m` metres, each listing the segments that pass through it.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Grid {
     cell_m: f64,
-    cells: HashMap<(i32, i32), Vec<u32>>,
+    cells: HashMap<Key, Vec<u32>>,
+    /// `cells_of[id]`: the cells segment `id` is registered in.
+    cells_of: Vec<Vec<Key>>,
 }
 
 impl Grid {
     pub(crate) fn new(cell_m: f64) -> Self {
-        Grid { cell_m, cells: HashMap::new() }
+        Grid { cell_m, cells: HashMap::new(), cells_of: Vec::new() }
     }
 
-    fn key(&self, x: f64, y: f64) -> (i32, i32) {
+    fn key(&self, x: f64, y: f64) -> Key {
         let clamp = |v: f64| (v / self.cell_m).floor().clamp(-1e9, 1e9) as i32;
         (clamp(x), clamp(y))
     }
@@ -28,6 +33,9 @@ impl Grid {
         let len = (b - a).norm();
         if !len.is_finite() {
             return;
+        }
+        if self.cells_of.len() <= id as usize {
+            self.cells_of.resize_with(id as usize + 1, Vec::new);
         }
         let steps = ((len / (self.cell_m / 3.0)).ceil() as usize).clamp(1, 1 << 20);
         let mut last = None;
@@ -41,8 +49,36 @@ impl Grid {
             let ids = self.cells.entry(key).or_default();
             if !ids.contains(&id) {
                 ids.push(id);
+                self.cells_of[id as usize].push(key);
             }
         }
+    }
+
+    /// Removes segment `id` from every cell it is registered in.
+    pub(crate) fn remove(&mut self, id: u32) {
+        let Some(keys) = self.cells_of.get_mut(id as usize).map(std::mem::take) else { return };
+        for key in keys {
+            if let Some(ids) = self.cells.get_mut(&key) {
+                ids.retain(|&i| i != id);
+                if ids.is_empty() {
+                    self.cells.remove(&key);
+                }
+            }
+        }
+    }
+
+    /// Renumbers segment `from` as `to` (which must not be registered).
+    pub(crate) fn rename(&mut self, from: u32, to: u32) {
+        let Some(keys) = self.cells_of.get_mut(from as usize).map(std::mem::take) else { return };
+        for key in &keys {
+            if let Some(ids) = self.cells.get_mut(key) {
+                ids.iter_mut().filter(|i| **i == from).for_each(|i| *i = to);
+            }
+        }
+        if self.cells_of.len() <= to as usize {
+            self.cells_of.resize_with(to as usize + 1, Vec::new);
+        }
+        self.cells_of[to as usize] = keys;
     }
 
     /// Calls `f` for each segment registered in a cell within `radius_m` of
@@ -67,17 +103,34 @@ impl Grid {
 mod tests {
     use super::*;
 
+    fn near(g: &Grid, x: f64, y: f64) -> Vec<u32> {
+        let mut found = vec![];
+        g.for_each_near(&Point2::new(x, y), 1.0, |id| found.push(id));
+        found
+    }
+
     #[test]
     fn finds_segments_passing_nearby() {
         let mut g = Grid::new(1.0);
         g.insert(7, &Point2::new(0.0, 0.0), &Point2::new(10.0, 0.0));
-        let mut found = vec![];
-        g.for_each_near(&Point2::new(9.5, 0.8), 1.0, |id| found.push(id));
-        assert!(found.contains(&7));
-        found.clear();
-        g.for_each_near(&Point2::new(5.0, 5.0), 1.0, |id| found.push(id));
-        assert!(found.is_empty());
-        g.for_each_near(&Point2::new(f64::NAN, 0.0), 1.0, |id| found.push(id));
-        assert!(found.is_empty());
+        assert!(near(&g, 9.5, 0.8).contains(&7));
+        assert!(near(&g, 5.0, 5.0).is_empty());
+        assert!(near(&g, f64::NAN, 0.0).is_empty());
+    }
+
+    #[test]
+    fn removal_and_renaming_are_exact() {
+        let mut g = Grid::new(1.0);
+        g.insert(0, &Point2::new(0.0, 0.0), &Point2::new(3.0, 0.0));
+        g.insert(1, &Point2::new(0.0, 5.0), &Point2::new(3.0, 5.0));
+        // Re-registering a grown extent adds cells, never duplicates.
+        g.insert(1, &Point2::new(0.0, 5.0), &Point2::new(6.0, 5.0));
+        g.remove(0);
+        assert!(near(&g, 1.0, 0.0).is_empty());
+        g.rename(1, 0);
+        assert!(near(&g, 5.5, 5.0).contains(&0));
+        assert!(!near(&g, 5.5, 5.0).contains(&1));
+        g.remove(0);
+        assert!(g.cells.is_empty(), "{:?}", g.cells);
     }
 }

@@ -23,12 +23,14 @@
 //! ```
 
 mod grid;
+mod lifecycle;
 mod map;
 mod metrics;
 #[cfg(feature = "serde")]
 mod records;
 
-pub use map::{Extremes, LineId, LineMap, MapLine, Match};
+pub use lifecycle::{Lifecycle, LineStatus};
+pub use map::{Extremes, LineId, LineMap, MapLine, Match, MatchGate};
 pub use metrics::{CentroidTerm, LineDistance, line_distance};
 #[cfg(feature = "serde")]
 pub use records::{MapLineRecord, MapRecord};
@@ -75,6 +77,11 @@ pub struct MapConfig {
     /// paper (and in older map files).
     #[cfg_attr(feature = "serde", serde(default))]
     pub merge_gate: Option<MergeGate>,
+    /// Tentative lines, confirmation, expiry, duplicate merging and the
+    /// straightness check ([`Lifecycle`]); `None` in the paper, where every
+    /// line is used at once and kept for ever (and in older map files).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub lifecycle: Option<Lifecycle>,
     /// Cell size of the spatial index, metres.
     pub grid_cell_m: f64,
 }
@@ -106,6 +113,7 @@ impl MapConfig {
             max_new_alpha_std_rad: None,
             sided: false,
             merge_gate: None,
+            lifecycle: None,
             grid_cell_m: 2.0,
         }
     }
@@ -143,11 +151,14 @@ impl MapConfig {
                 "must be finite and > 0",
             )?;
         }
+        if let Some(l) = &self.lifecycle {
+            l.validate()?;
+        }
         ConfigError::check(
-            self.grid_cell_m > 0.0 && self.grid_cell_m.is_finite(),
-            "mapping.grid_cell_m",
+            self.grid_cell_m >= 1e-3 && self.grid_cell_m.is_finite(),
+            "map.grid_cell_m",
             self.grid_cell_m,
-            "must be finite and > 0",
+            "must be finite and >= 0.001",
         )
     }
 }
@@ -157,7 +168,8 @@ impl Default for MapConfig {
     /// segment-gap centroid term (long walls stay one map line), refinement
     /// from all absorbed points, a robust extent, new map lines only from
     /// lines whose orientation is known to 1°, sided lines, and merges only of
-    /// lines within 5 cm of a map line and 0.3 m of its ends.
+    /// lines within 5 cm of a map line and 0.3 m of its ends, and the
+    /// standard [`Lifecycle`] (confirmed from 3 scans, expired after 10).
     fn default() -> Self {
         MapConfig {
             max_d_alpha_rad: 5f64.to_radians(),
@@ -169,6 +181,7 @@ impl Default for MapConfig {
             max_new_alpha_std_rad: Some(1f64.to_radians()),
             sided: true,
             merge_gate: Some(MergeGate { max_offset_m: 0.05, max_gap_m: 0.3 }),
+            lifecycle: Some(Lifecycle::standard()),
             grid_cell_m: 2.0,
         }
     }

@@ -3,9 +3,10 @@
 //! projection, and the refined variant that keeps every absorbed point's sums.
 
 use crate::grid::Grid;
-use crate::{LineDistance, MapConfig, MergeGate, line_distance};
+use crate::{LineDistance, LineStatus, MapConfig, MergeGate, line_distance};
 use pcaline_fitting::{Moments, line_from_moments};
 use pcaline_geometry::{ConfigError, LineSegment, Point2, Vector2};
+use std::collections::{HashMap, VecDeque};
 
 /// A stable identifier of a map line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -28,6 +29,54 @@ pub struct MapLine {
     /// Unit normal pointing from the line to the side it was first seen
     /// from; `None` when inserted without a viewpoint.
     pub facing: Option<Vector2<f64>>,
+    /// What the line may be used for ([`crate::Lifecycle`]).
+    pub status: LineStatus,
+    /// Distinct scans the line was seen in ([`LineMap::begin_scan`] counts
+    /// scans; a map fed without it counts every insertion as a scan).
+    pub scans_seen: u32,
+    /// The scan the line was first seen in.
+    pub first_scan: u64,
+    /// The scan the line was last seen in.
+    pub last_scan: u64,
+    /// Sum over the absorbed observations of `n_points * residual_std²`,
+    /// m²: what the points scatter about their own fits (for the
+    /// straightness test).
+    pub observed_scatter: f64,
+}
+
+impl MapLine {
+    /// A map line made of one observation, seen in scan `scan`.
+    pub fn new(id: LineId, line: LineSegment, moments: Moments, scan: u64) -> Self {
+        MapLine {
+            id,
+            line,
+            moments,
+            observations: 1,
+            extremes: Extremes::of(&line),
+            facing: None,
+            status: LineStatus::Confirmed,
+            scans_seen: 1,
+            first_scan: scan,
+            last_scan: scan,
+            observed_scatter: line.n_points as f64 * line.residual_std.powi(2),
+        }
+    }
+
+    /// Rms distance of the absorbed points from the line, metres.
+    pub fn rms_m(&self) -> f64 {
+        (self.moments.orthogonal_scatter(&self.line.direction) / self.moments.n.max(1) as f64)
+            .sqrt()
+    }
+
+    /// Rms residual of the absorbed observations about their own fits, metres.
+    pub fn observed_rms_m(&self) -> f64 {
+        (self.observed_scatter / self.moments.n.max(1) as f64).sqrt()
+    }
+
+    /// True when aiding may correct a pose with the line.
+    pub fn is_confirmed(&self) -> bool {
+        self.status == LineStatus::Confirmed
+    }
 }
 
 /// The extent of a map line: the accepted endpoints and, with the robust
@@ -49,7 +98,8 @@ pub struct Extremes {
 const CONFIRM_M: f64 = 0.05;
 
 impl Extremes {
-    fn of(line: &LineSegment) -> Self {
+    /// The extent of one observation, nothing pending.
+    pub fn of(line: &LineSegment) -> Self {
         Extremes {
             low: line.start,
             high: line.end,
@@ -142,20 +192,111 @@ pub struct Match {
     pub distance: LineDistance,
 }
 
+/// The gates of a match: what [`LineMap::find_match`] uses from the
+/// configuration, or wider ones an estimator derives from its pose
+/// uncertainty ([`LineMap::for_each_candidate`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatchGate {
+    /// Largest orientation difference, radians.
+    pub max_d_alpha_rad: f64,
+    /// Largest `d_rho`, metres.
+    pub max_d_rho_m: f64,
+    /// Largest distance of the new centroid from the map line, metres.
+    pub max_offset_m: Option<f64>,
+}
+
+impl MatchGate {
+    /// The gates of a map configuration.
+    pub fn of(config: &MapConfig) -> Self {
+        MatchGate {
+            max_d_alpha_rad: config.max_d_alpha_rad,
+            max_d_rho_m: config.max_d_rho_m,
+            max_offset_m: config.max_offset_m,
+        }
+    }
+}
+
 /// An incremental map of lines with a spatial index.
+///
+/// Line indices ([`Match::index`]) are positions in [`LineMap::lines`]: they
+/// hold until the next insertion or [`LineMap::begin_scan`], which may remove
+/// lines (expiry, duplicates). Ids ([`LineId`]) never change.
 #[derive(Debug, Clone)]
 pub struct LineMap {
     config: MapConfig,
     lines: Vec<MapLine>,
     grid: Grid,
     next_id: u64,
+    /// The current scan ([`LineMap::begin_scan`]).
+    scan: u64,
+    /// Whether scans are counted by the caller; otherwise every insertion
+    /// is a scan of its own.
+    counted: bool,
+    index_of: HashMap<LineId, usize>,
+    /// Tentative lines by first scan, oldest first (may hold lines since
+    /// confirmed or removed).
+    tentative: VecDeque<(u64, LineId)>,
 }
 
 impl LineMap {
     /// An empty map; an invalid configuration is a [`ConfigError`].
     pub fn new(config: MapConfig) -> Result<Self, ConfigError> {
         config.validate()?;
-        Ok(LineMap { grid: Grid::new(config.grid_cell_m), config, lines: Vec::new(), next_id: 0 })
+        Ok(LineMap {
+            grid: Grid::new(config.grid_cell_m),
+            config,
+            lines: Vec::new(),
+            next_id: 0,
+            scan: 0,
+            counted: false,
+            index_of: HashMap::new(),
+            tentative: VecDeque::new(),
+        })
+    }
+
+    /// Starts a new scan: observations inserted from now on count as one
+    /// sighting, and tentative lines not confirmed within
+    /// [`crate::Lifecycle::expire_after_scans`] are removed. A map that is
+    /// never told counts every insertion as a scan of its own.
+    pub fn begin_scan(&mut self) {
+        self.counted = true;
+        self.scan += 1;
+        let Some(life) = self.config.lifecycle else { return };
+        while let Some(&(first, id)) = self.tentative.front() {
+            if first + u64::from(life.expire_after_scans) > self.scan {
+                break;
+            }
+            self.tentative.pop_front();
+            if let Some(&i) = self.index_of.get(&id)
+                && self.lines[i].status == LineStatus::Tentative
+            {
+                self.remove_at(i);
+            }
+        }
+    }
+
+    /// The current scan number (0 before the first [`LineMap::begin_scan`]).
+    pub fn scan(&self) -> u64 {
+        self.scan
+    }
+
+    /// The map line with id `id`.
+    pub fn get(&self, id: LineId) -> Option<&MapLine> {
+        self.index_of.get(&id).map(|&i| &self.lines[i])
+    }
+
+    /// Removes the line at `index` (the last line takes its place).
+    fn remove_at(&mut self, index: usize) {
+        let last = self.lines.len() - 1;
+        self.grid.remove(index as u32);
+        if index != last {
+            self.grid.rename(last as u32, index as u32);
+        }
+        let removed = self.lines.swap_remove(index);
+        self.index_of.remove(&removed.id);
+        if index != last {
+            self.index_of.insert(self.lines[index].id, index);
+        }
     }
 
     /// The configuration.
@@ -206,36 +347,72 @@ impl LineMap {
         viewpoint: Option<&Point2<f64>>,
         merge: Option<MergeGate>,
     ) -> Option<Match> {
-        if !(line.alpha.is_finite()
-            && line.d.is_finite()
-            && line.centroid.coords.iter().all(|v| v.is_finite()))
-        {
-            return None;
-        }
         let mut best: Option<Match> = None;
-        self.grid.for_each_near(&line.centroid, self.config.max_d_rho_m, |id| {
-            let index = id as usize;
-            if best.is_some_and(|b| b.index == index) {
+        self.visit_candidates(line, viewpoint, &MatchGate::of(&self.config), |index, distance| {
+            let m = &self.lines[index];
+            if best.is_some_and(|b| b.index == index)
+                || merge.is_some_and(|gate| !within_merge_gate(&m.line, line, &gate))
+            {
                 return;
             }
-            let m = &self.lines[index];
-            let distance = line_distance(&m.line, line, self.config.centroid_term);
-            let offset_ok = self.config.max_offset_m.is_none_or(|max| {
-                (m.line.normal().dot(&line.centroid.coords) - m.line.d).abs() < max
-            });
-            let side_ok = !self.config.sided || same_side(m, viewpoint);
-            let merge_ok = merge.is_none_or(|gate| within_merge_gate(&m.line, line, &gate));
-            if distance.d_alpha.abs() < self.config.max_d_alpha_rad
-                && distance.d_rho < self.config.max_d_rho_m
-                && offset_ok
-                && side_ok
-                && merge_ok
-                && best.is_none_or(|b| distance.d_rho < b.distance.d_rho)
-            {
+            if best.is_none_or(|b| distance.d_rho < b.distance.d_rho) {
                 best = Some(Match { index, id: m.id, distance });
             }
         });
         best
+    }
+
+    /// Calls `f` once for every map line that `line` (world frame, seen
+    /// from `viewpoint`) matches under `gate` (and the side rule of
+    /// [`MapConfig::sided`]), with its metrics. Nothing for a non-finite
+    /// line. Only lines near `line`'s centroid are examined.
+    pub fn for_each_candidate(
+        &self,
+        line: &LineSegment,
+        viewpoint: Option<&Point2<f64>>,
+        gate: &MatchGate,
+        mut f: impl FnMut(Match, &MapLine),
+    ) {
+        let mut seen: Vec<usize> = Vec::new();
+        self.visit_candidates(line, viewpoint, gate, |index, distance| {
+            if !seen.contains(&index) {
+                seen.push(index);
+                let m = &self.lines[index];
+                f(Match { index, id: m.id, distance }, m);
+            }
+        });
+    }
+
+    /// The grid walk shared by the matchers (a line may be visited twice).
+    fn visit_candidates(
+        &self,
+        line: &LineSegment,
+        viewpoint: Option<&Point2<f64>>,
+        gate: &MatchGate,
+        mut f: impl FnMut(usize, LineDistance),
+    ) {
+        if !(line.alpha.is_finite()
+            && line.d.is_finite()
+            && line.centroid.coords.iter().all(|v| v.is_finite()))
+        {
+            return;
+        }
+        self.grid.for_each_near(&line.centroid, gate.max_d_rho_m, |id| {
+            let index = id as usize;
+            let m = &self.lines[index];
+            let distance = line_distance(&m.line, line, self.config.centroid_term);
+            let offset_ok = gate.max_offset_m.is_none_or(|max| {
+                (m.line.normal().dot(&line.centroid.coords) - m.line.d).abs() < max
+            });
+            let side_ok = !self.config.sided || same_side(m, viewpoint);
+            if distance.d_alpha.abs() < gate.max_d_alpha_rad
+                && distance.d_rho < gate.max_d_rho_m
+                && offset_ok
+                && side_ok
+            {
+                f(index, distance);
+            }
+        });
     }
 
     /// Adds a detected line (world frame, with the moments of its points in
@@ -267,10 +444,14 @@ impl LineMap {
         {
             return None;
         }
+        if !self.counted {
+            self.scan += 1;
+        }
         match self.best_match(line, viewpoint, self.config.merge_gate) {
             Some(m) => {
                 self.absorb(m.index, line, moments);
-                Some((m.id, Some(m)))
+                let merged_into = self.merge_duplicates_of(m.index);
+                Some((merged_into.unwrap_or(m.id), Some(m)))
             }
             None => {
                 if self.config.max_new_alpha_std_rad.is_some_and(|max| {
@@ -283,14 +464,16 @@ impl LineMap {
                 self.next_id += 1;
                 let index = self.lines.len() as u32;
                 self.grid.insert(index, &line.start, &line.end);
-                self.lines.push(MapLine {
-                    id,
-                    line: *line,
-                    moments: *moments,
-                    observations: 1,
-                    extremes: Extremes::of(line),
-                    facing: viewpoint.and_then(|v| facing(line, v)),
-                });
+                let mut new = MapLine::new(id, *line, *moments, self.scan);
+                new.facing = viewpoint.and_then(|v| facing(line, v));
+                if let Some(life) = self.config.lifecycle {
+                    new.status = life.status(1, 0.0, 0.0);
+                    if new.status == LineStatus::Tentative {
+                        self.tentative.push_back((self.scan, id));
+                    }
+                }
+                self.lines.push(new);
+                self.index_of.insert(id, index as usize);
                 Some((id, None))
             }
         }
@@ -322,6 +505,90 @@ impl LineMap {
         base.n_points = m.moments.n;
         m.line = base;
         m.observations += 1;
+        m.observed_scatter += line.n_points as f64 * line.residual_std.powi(2);
+        if m.last_scan != self.scan {
+            m.last_scan = self.scan;
+            m.scans_seen += 1;
+        }
+        if let Some(life) = self.config.lifecycle {
+            m.status = life.status(m.scans_seen, m.rms_m(), m.observed_rms_m());
+        }
+        let (a, b) = (m.line.start, m.line.end);
+        self.grid.insert(index as u32, &a, &b);
+    }
+
+    /// With [`crate::Lifecycle::merge_duplicates`], merges into line `index`
+    /// every other line of the same wall: seen from the same side, each
+    /// within the merge gate of the other. Returns the id of the surviving
+    /// line when a merge happened (the one seen in more scans).
+    fn merge_duplicates_of(&mut self, index: usize) -> Option<LineId> {
+        let life = self.config.lifecycle?;
+        let gate = self.config.merge_gate?;
+        if !life.merge_duplicates {
+            return None;
+        }
+        let mut keep = self.lines[index].id;
+        loop {
+            let i = self.index_of[&keep];
+            let me = &self.lines[i];
+            let mut other = None;
+            let reach = me.line.length() / 2.0 + gate.max_gap_m + self.config.grid_cell_m;
+            self.grid.for_each_near(&me.line.centroid, reach, |id| {
+                let j = id as usize;
+                if other.is_some() || j == i {
+                    return;
+                }
+                let o = &self.lines[j];
+                let facing_ok = match (me.facing, o.facing) {
+                    (Some(a), Some(b)) => a.dot(&b) > 0.0,
+                    _ => true,
+                };
+                if facing_ok
+                    && line_distance(&me.line, &o.line, self.config.centroid_term).d_alpha.abs()
+                        < self.config.max_d_alpha_rad
+                    && within_merge_gate(&me.line, &o.line, &gate)
+                    && within_merge_gate(&o.line, &me.line, &gate)
+                {
+                    other = Some(j);
+                }
+            });
+            let j = other?;
+            // The line seen in more scans survives; the other is absorbed.
+            let (survivor, absorbed) =
+                if self.lines[j].scans_seen > self.lines[i].scans_seen { (j, i) } else { (i, j) };
+            let gone = self.lines[absorbed].clone();
+            self.absorb_line(survivor, &gone);
+            keep = self.lines[survivor].id;
+            self.remove_at(absorbed);
+        }
+    }
+
+    /// Merges map line `other` into line `index`: sums, extents, counts.
+    fn absorb_line(&mut self, index: usize, other: &MapLine) {
+        let m = &mut self.lines[index];
+        let merged = m.moments.merge(&other.moments);
+        let (lo_pt, hi_pt) = (m.line.start, m.line.end);
+        if let Some(refit) = line_from_moments(&merged, &lo_pt, &hi_pt) {
+            let mut base = refit;
+            let s = |p: &Point2<f64>| (p - base.centroid).dot(&base.direction);
+            let along = [m.line.start, m.line.end, other.line.start, other.line.end].map(|p| s(&p));
+            let lo = along.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = along.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            base.start = base.centroid + base.direction * lo;
+            base.end = base.centroid + base.direction * hi;
+            base.n_points = merged.n;
+            m.line = base;
+            m.extremes = Extremes::of(&base);
+        }
+        m.moments = merged;
+        m.observations += other.observations;
+        m.observed_scatter += other.observed_scatter;
+        m.scans_seen = m.scans_seen.max(other.scans_seen);
+        m.first_scan = m.first_scan.min(other.first_scan);
+        m.last_scan = m.last_scan.max(other.last_scan);
+        if let Some(life) = self.config.lifecycle {
+            m.status = life.status(m.scans_seen, m.rms_m(), m.observed_rms_m());
+        }
         let (a, b) = (m.line.start, m.line.end);
         self.grid.insert(index as u32, &a, &b);
     }
@@ -331,8 +598,13 @@ impl LineMap {
         let mut map = LineMap::new(config)?;
         for (i, l) in lines.iter().enumerate() {
             map.grid.insert(i as u32, &l.line.start, &l.line.end);
+            map.index_of.insert(l.id, i);
+            if l.status == LineStatus::Tentative {
+                map.tentative.push_back((l.first_scan, l.id));
+            }
         }
         map.next_id = lines.iter().map(|l| l.id.0 + 1).max().unwrap_or(0);
+        map.scan = lines.iter().map(|l| l.last_scan).max().unwrap_or(0);
         map.lines = lines;
         Ok(map)
     }

@@ -1,6 +1,6 @@
 //! Plain records of a map for saving and loading with serde (feature `serde`).
 
-use crate::{Extremes, LineId, LineMap, MapConfig, MapLine};
+use crate::{Extremes, LineId, LineMap, LineStatus, MapConfig, MapLine};
 use pcaline_fitting::Moments;
 use pcaline_geometry::{ConfigError, LineSegment, Matrix2, Point2, Vector2};
 
@@ -33,6 +33,20 @@ pub struct MapLineRecord {
     /// files written before it existed).
     #[serde(default)]
     pub facing: Option<[f64; 2]>,
+    /// What the line may be used for (absent in older files: confirmed).
+    #[serde(default)]
+    pub status: LineStatus,
+    /// Distinct scans the line was seen in (absent in older files: its
+    /// observations).
+    #[serde(default)]
+    pub scans_seen: Option<u32>,
+    /// The scan it was last seen in.
+    #[serde(default)]
+    pub last_scan: u64,
+    /// `sum n_points * residual_std²` of its observations, m² (absent in
+    /// older files: its own scatter).
+    #[serde(default)]
+    pub observed_scatter: Option<f64>,
 }
 
 /// A saved map.
@@ -70,6 +84,10 @@ impl MapRecord {
                     scatter: [m.moments.sxx, m.moments.sxy, m.moments.syy],
                     observations: m.observations,
                     facing: m.facing.map(|f| [f.x, f.y]),
+                    status: m.status,
+                    scans_seen: Some(m.scans_seen),
+                    last_scan: m.last_scan,
+                    observed_scatter: Some(m.observed_scatter),
                 }
             })
             .collect();
@@ -115,14 +133,15 @@ impl MapRecord {
                     pending_low: [None; 2],
                     pending_high: [None; 2],
                 };
-                MapLine {
-                    id: LineId(r.id),
-                    line,
-                    moments,
-                    observations: r.observations,
-                    extremes,
-                    facing: r.facing.map(|f| Vector2::new(f[0], f[1])),
-                }
+                let mut m = MapLine::new(LineId(r.id), line, moments, r.last_scan);
+                m.observations = r.observations;
+                m.extremes = extremes;
+                m.facing = r.facing.map(|f| Vector2::new(f[0], f[1]));
+                m.status = r.status;
+                m.scans_seen = r.scans_seen.unwrap_or(r.observations);
+                m.observed_scatter =
+                    r.observed_scatter.unwrap_or(moments.orthogonal_scatter(&line.direction));
+                m
             })
             .collect();
         LineMap::from_lines(self.config, lines)
