@@ -1,11 +1,19 @@
 //! [`Aiding`]: the mapping and localization-aiding loop of the paper's
-//! section 2.1, one scan's lines at a time.
+//! section 2.1, one scan's lines at a time, with the paper's corrections
+//! applied in full or (the default) the estimator that weighs them against
+//! the source's uncertainty.
 
-use crate::{AidingConfig, AidingMode, Fallback, HeadingWeights, NormalConstraint, StepReport};
-use crate::{heading_correction, rotate_step, solve_translation, weighted_offset};
+use crate::{
+    AidingConfig, AidingMode, CalibrationConfig, Fallback, HeadingWeights, LineMeasurement,
+    NormalConstraint, Prediction, SourceCalibration, StepReport,
+};
+use crate::{
+    gate_distance2, heading_correction, iterated_update, joint_consistent, measure, predict,
+    rotate_step, solve_translation, weighted_offset,
+};
 use pcaline_fitting::Moments;
-use pcaline_geometry::{ConfigError, LineSegment, Point2, Pose2, Vector2};
-use pcaline_mapping::{LineMap, MapConfig};
+use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Vector2};
+use pcaline_mapping::{LineId, LineMap, LineStatus, MapConfig, MatchGate};
 
 /// A detected line in the sensor frame with the moments of its points.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -14,6 +22,38 @@ pub struct SensorLine {
     pub line: LineSegment,
     /// Moments of its points, sensor frame.
     pub moments: Moments,
+}
+
+/// What became of one line of a scan in the estimator's step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum MatchOutcome {
+    /// Its match corrected the pose.
+    Used,
+    /// No map line within the gates.
+    NoCandidate,
+    /// It matched only tentative or not-straight map lines.
+    Unconfirmed,
+    /// Its best candidate lay outside the Mahalanobis gate.
+    OutsideGate,
+    /// Two map lines in its gate would correct the pose differently.
+    Ambiguous,
+    /// Its match disagreed with the scan's consistent set.
+    Inconsistent,
+    /// Its match was consistent, but the correction was refused
+    /// ([`Fallback::InconsistentWithSource`]).
+    Refused,
+}
+
+/// One line of a scan and what the estimator did with it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Association {
+    /// Index of the line in the scan's lines.
+    pub line: usize,
+    /// The map line it was matched with, if any.
+    pub map_line: Option<LineId>,
+    /// What became of it.
+    pub outcome: MatchOutcome,
 }
 
 /// The loop: a localization source's motion is composed onto the corrected
@@ -25,21 +65,53 @@ pub struct Aiding {
     config: AidingConfig,
     map: LineMap,
     corrected: Option<Pose2>,
+    covariance: Matrix3<f64>,
     last_source: Option<Pose2>,
+    last_stamp_s: Option<f64>,
+    /// The last estimated motion (for constant-velocity prediction).
+    last_motion: Option<Pose2>,
+    /// The factor on the motion noise's variances ([`crate::NoiseAdaptation`]).
+    motion_noise_scale: f64,
+    /// The time since the previous scan, when both were stamped.
+    step_dt_s: Option<f64>,
+    /// The source's systematic errors.
+    calibration: SourceCalibration,
+    /// The predicted step in the world frame (for the calibration).
+    step_world: Vector2<f64>,
+    associations: Vec<Association>,
 }
 
 impl Aiding {
     /// A loop with an empty map.
     pub fn new(config: AidingConfig, map: MapConfig) -> Result<Self, ConfigError> {
-        config.validate()?;
-        Ok(Aiding { config, map: LineMap::new(map)?, corrected: None, last_source: None })
+        Self::with_map(config, LineMap::new(map)?)
     }
 
     /// A loop that continues from an existing map (for example one loaded
     /// from a file); the first pose is taken from the source as it is.
     pub fn with_map(config: AidingConfig, map: LineMap) -> Result<Self, ConfigError> {
         config.validate()?;
-        Ok(Aiding { config, map, corrected: None, last_source: None })
+        Ok(Aiding {
+            config,
+            map,
+            corrected: None,
+            covariance: Matrix3::zeros(),
+            last_source: None,
+            last_stamp_s: None,
+            last_motion: None,
+            motion_noise_scale: 1.0,
+            step_dt_s: None,
+            calibration: SourceCalibration::new(
+                &config.estimator.calibration.unwrap_or(CalibrationConfig::standard()),
+            ),
+            step_world: Vector2::zeros(),
+            associations: Vec::new(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &AidingConfig {
+        &self.config
     }
 
     /// The map built so far.
@@ -52,20 +124,90 @@ impl Aiding {
         self.corrected
     }
 
+    /// The covariance of the latest pose, `(x, y, heading)`, in the world
+    /// frame (the estimator's; zero in the other modes).
+    pub fn covariance(&self) -> Matrix3<f64> {
+        self.covariance
+    }
+
+    /// The source's estimated systematic errors ([`CalibrationConfig`];
+    /// zeros without it).
+    pub fn calibration(&self) -> &SourceCalibration {
+        &self.calibration
+    }
+
+    /// What the last step of the estimator did with each line.
+    pub fn associations(&self) -> &[Association] {
+        &self.associations
+    }
+
     /// Processes one scan given the source's absolute pose estimate
     /// (`world_from_sensor` as the localization source sees it). The source's
     /// motion since its previous pose is composed onto the corrected pose;
     /// the first pose is taken as it is.
     pub fn step(&mut self, source_pose: &Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
+        let dt = self.step_dt_s.take();
         if !source_pose.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
         }
         let increment = self.last_source.map(|s| s.between(source_pose));
         self.last_source = Some(*source_pose);
         match (self.corrected, increment) {
-            (Some(_), Some(inc)) => self.step_increment(&inc, lines),
-            _ => self.process(*source_pose, lines),
+            (Some(_), Some(inc)) => {
+                self.step_dt_s = dt;
+                self.step_increment(&inc, lines)
+            }
+            _ => self.process(*source_pose, Matrix3::zeros(), Prediction::Source, None, lines),
         }
+    }
+
+    /// As [`Aiding::step`], for a scan stamped `stamp_s` seconds: a stamp
+    /// earlier than the previous scan's skips the scan
+    /// ([`Fallback::StampBackwards`]); a non-finite stamp is ignored.
+    pub fn step_at(
+        &mut self,
+        stamp_s: f64,
+        source_pose: &Pose2,
+        lines: &[SensorLine],
+    ) -> (Pose2, StepReport) {
+        if self.stamp_went_backwards(stamp_s) {
+            // The source's pose is reported with the last correction, and
+            // nothing is learnt from the scan.
+            let mut out = self.fall_back(Fallback::StampBackwards);
+            if let (Some(last), true) = (self.last_source, source_pose.is_finite()) {
+                out.0 = out.0.compose(&last.between(source_pose));
+            }
+            return out;
+        }
+        self.step(source_pose, lines)
+    }
+
+    /// Processes one scan without a localization source (LIDAR-only mode):
+    /// the last estimated motion is repeated as the prediction, with
+    /// [`crate::EstimatorConfig::constant_velocity`] noise, and the line
+    /// matches estimate the motion. `stamp_s`, when given, is checked as in
+    /// [`Aiding::step_at`].
+    pub fn step_without_source(
+        &mut self,
+        stamp_s: Option<f64>,
+        lines: &[SensorLine],
+    ) -> (Pose2, StepReport) {
+        if stamp_s.is_some_and(|t| self.stamp_went_backwards(t)) {
+            return self.fall_back(Fallback::StampBackwards);
+        }
+        let Some(previous) = self.corrected else {
+            return self.process(
+                Pose2::identity(),
+                Matrix3::zeros(),
+                Prediction::ConstantVelocity,
+                None,
+                lines,
+            );
+        };
+        let motion = self.last_motion.unwrap_or_default();
+        let noise = self.config.estimator.constant_velocity;
+        let (predicted, cov) = predict(&previous, &self.covariance, &motion, &noise);
+        self.process(predicted, cov, Prediction::ConstantVelocity, None, lines)
     }
 
     /// Processes one scan given the source's motion since the previous scan
@@ -79,28 +221,273 @@ impl Aiding {
             return self.fall_back(Fallback::NonFiniteSource);
         }
         let previous = self.corrected.unwrap_or_default();
-        let predicted = previous.compose(increment);
+        let e = &self.config.estimator;
+        let jumped = increment.x.hypot(increment.y) > e.max_source_step_m
+            || increment.heading.abs() > e.max_source_turn_rad;
+        let dt = self.step_dt_s.take().filter(|dt| *dt > 0.0 && dt.is_finite());
+        let (increment, noise, prediction, fallback) = if jumped {
+            let motion = self.last_motion.unwrap_or_default();
+            (motion, e.constant_velocity, Prediction::ConstantVelocity, Some(Fallback::SourceJump))
+        } else {
+            (*increment, e.motion.scaled(self.motion_noise_scale), Prediction::Source, None)
+        };
+        let (increment, var_heading, var_along) = match (e.calibration, jumped) {
+            (Some(c), false) => self.calibration.correct(&c, &increment, dt),
+            _ => (increment, 0.0, 0.0),
+        };
+        let (predicted, mut cov) = predict(&previous, &self.covariance, &increment, &noise);
+        // The calibration's own uncertainty over the step.
+        self.step_world = Vector2::new(predicted.x - previous.x, predicted.y - previous.y);
+        cov[(2, 2)] += var_heading;
+        let len = self.step_world.norm();
+        if len > 0.0 {
+            let u = self.step_world / len;
+            let mut t = cov.fixed_view_mut::<2, 2>(0, 0);
+            t += u * u.transpose() * var_along;
+        }
+        self.step_dt_s = dt;
         if !predicted.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
         }
-        self.process(predicted, lines)
+        self.process(predicted, cov, prediction, fallback, lines)
+    }
+
+    fn stamp_went_backwards(&mut self, stamp_s: f64) -> bool {
+        if !stamp_s.is_finite() {
+            return false;
+        }
+        if self.last_stamp_s.is_some_and(|last| stamp_s < last) {
+            return true;
+        }
+        self.step_dt_s = self.last_stamp_s.map(|last| stamp_s - last);
+        self.last_stamp_s = Some(stamp_s);
+        false
     }
 
     /// Keeps the last corrected pose (or the identity) and reports why.
     fn fall_back(&mut self, why: Fallback) -> (Pose2, StepReport) {
         let pose = self.corrected.unwrap_or_default();
-        (pose, StepReport { fallback: Some(why), ..StepReport::default() })
+        self.associations.clear();
+        (
+            pose,
+            StepReport {
+                fallback: Some(why),
+                covariance: self.covariance,
+                ..StepReport::default()
+            },
+        )
     }
 
     fn world_lines(&self, pose: &Pose2, lines: &[SensorLine]) -> Vec<(LineSegment, Moments)> {
         lines.iter().map(|l| (l.line.transformed(pose), l.moments.transformed(pose))).collect()
     }
 
-    fn process(&mut self, predicted: Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
+    /// Corrects the prediction with the mode's rule, then updates the map.
+    fn process(
+        &mut self,
+        predicted: Pose2,
+        predicted_cov: Matrix3<f64>,
+        prediction: Prediction,
+        fallback: Option<Fallback>,
+        lines: &[SensorLine],
+    ) -> (Pose2, StepReport) {
+        self.map.begin_scan();
+        self.associations.clear();
+        let previous = self.corrected;
+        let (mut pose, mut report, insert) = if self.config.mode == AidingMode::Estimator {
+            self.estimate(predicted, predicted_cov, lines)
+        } else {
+            let (pose, report) = self.correct_in_full(predicted, lines);
+            (pose, report, true)
+        };
+        report.prediction = prediction;
+        if fallback.is_some() {
+            report.fallback = fallback;
+        }
+        if !pose.is_finite() {
+            pose = predicted;
+            report.fallback = Some(Fallback::NonFiniteCorrection);
+        }
+        if insert {
+            let viewpoint = Point2::new(pose.x, pose.y);
+            for (l, m) in self.world_lines(&pose, lines) {
+                self.map.insert_seen_from(&l, &m, Some(&viewpoint));
+            }
+        }
+        self.last_motion = previous.map(|p| p.between(&pose));
+        self.corrected = Some(pose);
+        report.covariance = self.covariance;
+        report.motion_noise_scale = self.motion_noise_scale;
+        (pose, report)
+    }
+
+    /// The estimator's step: gate, joint check, iterated update, innovation
+    /// test. Returns the pose, the report and whether the scan's lines may
+    /// update the map (not after a refused correction).
+    fn estimate(
+        &mut self,
+        predicted: Pose2,
+        predicted_cov: Matrix3<f64>,
+        lines: &[SensorLine],
+    ) -> (Pose2, StepReport, bool) {
+        let mut report = StepReport::default();
+        self.covariance = predicted_cov;
+        if self.map.is_empty() {
+            report.fallback = Some(Fallback::NoMatches);
+            return (predicted, report, true);
+        }
+        let e = self.config.estimator;
+        let viewpoint = Point2::new(predicted.x, predicted.y);
+        let sigma_heading = predicted_cov[(2, 2)].max(0.0).sqrt();
+        let sigma_position = (predicted_cov[(0, 0)] + predicted_cov[(1, 1)]).max(0.0).sqrt();
+        let map_gate = MatchGate::of(self.map.config());
+        // Gated matches: (line index, map index, measurement at the prediction).
+        let mut gated: Vec<(usize, usize, LineMeasurement)> = Vec::new();
+        for (i, (sensor, (world, _))) in
+            lines.iter().zip(self.world_lines(&predicted, lines)).enumerate()
+        {
+            let lever = (world.centroid - viewpoint).norm();
+            let offset_gate = (3.5 * (sigma_position + lever * sigma_heading))
+                .max(map_gate.max_offset_m.unwrap_or(0.0))
+                .min(e.max_gate_offset_m);
+            let gate = MatchGate {
+                max_d_alpha_rad: (3.5 * sigma_heading)
+                    .max(map_gate.max_d_alpha_rad)
+                    .min(e.max_gate_alpha_rad),
+                max_d_rho_m: map_gate.max_d_rho_m.max(2.0 * offset_gate),
+                max_offset_m: Some(offset_gate),
+            };
+            let mut best: Option<(f64, usize, LineId, LineMeasurement)> = None;
+            let mut in_gate: Vec<LineMeasurement> = Vec::new();
+            let mut unconfirmed = false;
+            self.map.for_each_candidate(&world, Some(&viewpoint), &gate, |m, map_line| {
+                let tentative = map_line.status == LineStatus::Tentative;
+                if !(map_line.is_confirmed() || tentative && e.tentative_variance_scale.is_some()) {
+                    unconfirmed = true;
+                    return;
+                }
+                let mut meas = measure(&sensor.line, map_line, &predicted, &e.measurement);
+                if tentative {
+                    meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
+                }
+                let d2 = gate_distance2(&meas, &predicted_cov);
+                if d2 <= e.gate_chi2 {
+                    in_gate.push(meas);
+                }
+                if best.is_none_or(|b| d2 < b.0) {
+                    best = Some((d2, m.index, m.id, meas));
+                }
+            });
+            // Two map lines in the gate that would correct the pose
+            // differently: the line is ambiguous and is not used.
+            let ambiguous = best.is_some_and(|(_, _, _, b)| {
+                in_gate.iter().any(|m| !same_correction(m, &b, &e.measurement))
+            });
+            let (map_line, outcome) = match best {
+                Some((_, _, id, _)) if ambiguous => {
+                    report.ambiguous += 1;
+                    (Some(id), MatchOutcome::Ambiguous)
+                }
+                Some((d2, index, id, meas)) if d2 <= e.gate_chi2 => {
+                    gated.push((i, index, meas));
+                    (Some(id), MatchOutcome::Used)
+                }
+                Some((_, _, id, _)) => {
+                    report.rejected_gate += 1;
+                    (Some(id), MatchOutcome::OutsideGate)
+                }
+                None if unconfirmed => {
+                    report.unconfirmed += 1;
+                    (None, MatchOutcome::Unconfirmed)
+                }
+                None => (None, MatchOutcome::NoCandidate),
+            };
+            self.associations.push(Association { line: i, map_line, outcome });
+        }
+        if gated.is_empty() {
+            report.fallback = Some(Fallback::NoMatches);
+            return (predicted, report, true);
+        }
+        // Joint consistency, hypotheses from the matches with the most points first.
+        gated.sort_by_key(|(i, _, _)| std::cmp::Reverse(lines[*i].line.n_points));
+        let measurements: Vec<LineMeasurement> = gated.iter().map(|g| g.2).collect();
+        let flags = joint_consistent(&measurements, &predicted_cov, e.consensus_chi2, 12);
+        let consistent: Vec<(usize, usize)> =
+            gated.iter().zip(&flags).filter(|(_, f)| **f).map(|(g, _)| (g.0, g.1)).collect();
+        for ((i, _, _), ok) in gated.iter().zip(&flags) {
+            if !ok {
+                report.rejected_joint += 1;
+                self.associations[*i].outcome = MatchOutcome::Inconsistent;
+            }
+        }
+        if consistent.len() < e.min_matches.max(1) {
+            report.fallback = Some(Fallback::NoMatches);
+            return (predicted, report, true);
+        }
+        let map = &self.map;
+        let update = iterated_update(&predicted, &predicted_cov, e.iterations, e.huber_k, |pose| {
+            consistent
+                .iter()
+                .map(|&(i, j)| {
+                    let map_line = &map.lines()[j];
+                    let mut meas = measure(&lines[i].line, map_line, pose, &e.measurement);
+                    if map_line.status == LineStatus::Tentative {
+                        meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
+                    }
+                    meas
+                })
+                .collect()
+        });
+        let Some(update) = update else {
+            report.fallback = Some(Fallback::NonFiniteCorrection);
+            return (predicted, report, true);
+        };
+        report.correction_distance2 = update.correction_distance2;
+        if let Some(a) = e.adaptation {
+            self.motion_noise_scale =
+                a.next(self.motion_noise_scale, update.correction_distance2, update.correction_dof);
+        }
+        if update.correction_distance2 > e.innovation_chi2 {
+            // Refused: keep the prediction, widen its uncertainty by the excess.
+            let inflation = (update.correction_distance2 / e.innovation_chi2).min(e.max_inflation);
+            self.covariance = predicted_cov * inflation;
+            report.fallback = Some(Fallback::InconsistentWithSource);
+            for &(i, _) in &consistent {
+                self.associations[i].outcome = MatchOutcome::Refused;
+            }
+            return (predicted, report, false);
+        }
+        report.matches = consistent.len();
+        report.heading_correction_rad =
+            pcaline_geometry::wrap_angle(update.pose.heading - predicted.heading);
+        if let Some(c) = e.calibration {
+            self.calibration.observe(
+                &c,
+                self.step_dt_s.take(),
+                &self.step_world,
+                (&report.translation_correction_m, report.heading_correction_rad),
+                &predicted_cov,
+                &update.covariance,
+            );
+        }
+        report.translation_correction_m =
+            Vector2::new(update.pose.x - predicted.x, update.pose.y - predicted.y);
+        report.constrained_directions = constrained_directions(&update.covariance, &predicted_cov);
+        self.covariance = update.covariance;
+        (update.pose, report, true)
+    }
+
+    /// The paper's heading aiding and the full-pose variant: each scan's
+    /// correction applied in full.
+    fn correct_in_full(&mut self, predicted: Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
         let mut report = StepReport::default();
         let mut pose = predicted;
         let previous = self.corrected;
-        if self.config.mode != AidingMode::None && !self.map.is_empty() {
+        if self.config.mode != AidingMode::None {
+            if self.map.is_empty() {
+                report.fallback = Some(Fallback::NoMatches);
+                return (pose, report);
+            }
             let rounds = match self.config.mode {
                 AidingMode::FullPose => self.config.iterations.max(1),
                 _ => 1,
@@ -189,23 +576,42 @@ impl Aiding {
                 report.constrained_directions = fix.constrained_directions;
             }
         }
-        if !pose.is_finite() {
-            pose = predicted;
-            report.fallback = Some(Fallback::NonFiniteCorrection);
-        }
-        let viewpoint = Point2::new(pose.x, pose.y);
-        for (l, m) in self.world_lines(&pose, lines) {
-            self.map.insert_seen_from(&l, &m, Some(&viewpoint));
-        }
-        self.corrected = Some(pose);
         (pose, report)
     }
+}
+
+/// Whether two candidate matches of one line would correct the pose alike:
+/// their residuals differ by less than the measurement floors (the pieces
+/// of one wall either side of a doorway, say).
+fn same_correction(
+    a: &LineMeasurement,
+    b: &LineMeasurement,
+    floors: &crate::MeasurementNoise,
+) -> bool {
+    (a.residual[0] - b.residual[0]).abs() <= 2.0 * floors.alpha_floor_rad
+        && (a.residual[1] - b.residual[1]).abs() <= 2.0 * floors.offset_floor_m
+}
+
+/// How many directions of the position the update constrained: those whose
+/// variance it reduced to under half the prediction's.
+fn constrained_directions(posterior: &Matrix3<f64>, prior: &Matrix3<f64>) -> usize {
+    let post = posterior.fixed_view::<2, 2>(0, 0).symmetric_eigen();
+    let prior_max = prior.fixed_view::<2, 2>(0, 0).symmetric_eigen().eigenvalues.max();
+    post.eigenvalues.iter().filter(|v| **v < 0.5 * prior_max).count()
 }
 
 impl Default for StepReport {
     fn default() -> Self {
         StepReport {
             matches: 0,
+            rejected_gate: 0,
+            ambiguous: 0,
+            rejected_joint: 0,
+            unconfirmed: 0,
+            prediction: Prediction::Source,
+            covariance: Matrix3::zeros(),
+            correction_distance2: 0.0,
+            motion_noise_scale: 1.0,
             heading_correction_rad: 0.0,
             translation_correction_m: Vector2::zeros(),
             constrained_directions: 0,
