@@ -30,12 +30,13 @@ impl MapperConfig {
 }
 
 impl Default for MapperConfig {
-    /// The default detector, a refining map, and full-pose aiding.
+    /// The default detector, a refining map with the line lifecycle, and
+    /// the estimator.
     fn default() -> Self {
         MapperConfig {
             detector: Config::default(),
             map: MapConfig::default(),
-            aiding: AidingConfig::full_pose(),
+            aiding: AidingConfig::estimator(),
         }
     }
 }
@@ -82,10 +83,24 @@ impl Mapper {
         })
     }
 
-    /// Processes one scan with the localization source's pose estimate for it.
+    /// Processes one scan with the localization source's pose estimate for
+    /// it. A stamped scan ([`Scan::stamp_s`]) lets the estimator learn the
+    /// source's heading-rate bias, and a stamp going backwards skips it.
     pub fn process(&mut self, scan: &Scan, source_pose: &Pose2) -> MapperStep {
         self.detect(scan);
-        let (pose, report) = self.aiding.step(source_pose, &self.lines);
+        let (pose, report) = match scan.stamp_s {
+            Some(t) => self.aiding.step_at(t, source_pose, &self.lines),
+            None => self.aiding.step(source_pose, &self.lines),
+        };
+        MapperStep { pose, lines: self.lines.len(), report }
+    }
+
+    /// Processes one scan without a localization source (LIDAR-only mode):
+    /// the last estimated motion is the prediction, the line matches
+    /// estimate the motion.
+    pub fn process_without_source(&mut self, scan: &Scan) -> MapperStep {
+        self.detect(scan);
+        let (pose, report) = self.aiding.step_without_source(scan.stamp_s, &self.lines);
         MapperStep { pose, lines: self.lines.len(), report }
     }
 

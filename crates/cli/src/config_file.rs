@@ -9,6 +9,8 @@
 //! min_line_points = 8
 //! [map]
 //! max_offset_m = 0.2
+//! [aiding.estimator.motion]
+//! rotation_per_m = 0.02       # the localization source's noise
 //! ```
 //!
 //! `pcaline eval --show-config NAME` prints a preset in this form with every
@@ -19,7 +21,7 @@
 
 use crate::exit::BadInput;
 use anyhow::Result;
-use pcaline::aiding::AidingConfig;
+use pcaline::aiding::{AidingConfig, AidingMode};
 use pcaline::mapping::MapConfig;
 use pcaline::segmentation::NoiseEstimation;
 use pcaline::{Config, RangeNoise};
@@ -41,9 +43,24 @@ pub struct NamedConfig {
     pub detector: Config,
     /// The line map.
     pub map: MapConfig,
+    /// The aiding (the estimator by default; `pcaline map --aiding` and the
+    /// evaluation's comparison modes replace its mode, not its settings).
+    pub aiding: AidingConfig,
 }
 
 impl NamedConfig {
+    /// The configuration's aiding in mode `mode` (its estimator settings kept).
+    pub fn aiding_in(&self, mode: AidingMode) -> AidingConfig {
+        let mut a = match mode {
+            AidingMode::Estimator => self.aiding,
+            AidingMode::Heading => self.heading_aiding(),
+            AidingMode::None => AidingConfig::none(),
+            _ => AidingConfig::full_pose(),
+        };
+        a.estimator = self.aiding.estimator;
+        a
+    }
+
     /// The heading aiding that goes with the configuration: the paper's
     /// eq. 11-14 for the paper preset, inverse-variance weights otherwise.
     pub fn heading_aiding(&self) -> AidingConfig {
@@ -57,6 +74,7 @@ struct ConfigFile {
     preset: String,
     detector: Config,
     map: MapConfig,
+    aiding: AidingConfig,
 }
 
 /// The preset `name`; `told-sigma` is the default detector told the range
@@ -78,7 +96,13 @@ fn preset(name: &str, sigma_m: f64) -> Option<(Config, MapConfig)> {
 /// file. `sigma_m` is the range noise `told-sigma` is told.
 pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
     if let Some((detector, map)) = preset(spec, sigma_m) {
-        return Ok(NamedConfig { name: spec.to_string(), preset: spec.to_string(), detector, map });
+        return Ok(NamedConfig {
+            name: spec.to_string(),
+            preset: spec.to_string(),
+            detector,
+            map,
+            aiding: AidingConfig::estimator(),
+        });
     }
     let path = Path::new(spec);
     if !path.exists() {
@@ -114,19 +138,23 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
         ))
         .into());
     };
-    let mut merged = Value::try_from(ConfigFile { preset: base_name.into(), detector, map })?;
+    let aiding = AidingConfig::estimator();
+    let mut merged =
+        Value::try_from(ConfigFile { preset: base_name.into(), detector, map, aiding })?;
     merge(&mut merged, &overrides, "").map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
     let file: ConfigFile =
         merged.try_into().map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
     file.detector
         .validate()
         .and_then(|()| file.map.validate())
+        .and_then(|()| file.aiding.validate())
         .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
     Ok(NamedConfig {
         name: spec.to_string(),
         preset: base_name.to_string(),
         detector: file.detector,
         map: file.map,
+        aiding: file.aiding,
     })
 }
 
@@ -139,7 +167,8 @@ pub fn show(name: &str) -> Result<String> {
         ))
         .into());
     };
-    Ok(toml::to_string(&ConfigFile { preset: name.into(), detector, map })?)
+    let aiding = AidingConfig::estimator();
+    Ok(toml::to_string(&ConfigFile { preset: name.into(), detector, map, aiding })?)
 }
 
 /// Writes `overrides` into `base`: objects key by key, anything else whole.
@@ -177,7 +206,8 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 7] = [
+    const OPTIONAL: [&str; 8] = [
+        "map.lifecycle",
         "detector.noise_estimation",
         "detector.fitting.residual_test",
         "detector.fitting.orientation_test",
@@ -208,7 +238,11 @@ mod tests {
             let path = write(&format!("{name}.toml"), &text);
             let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
             let p = resolve(name, 0.01).unwrap();
-            assert_eq!((c.detector, c.map), (p.detector, p.map), "{name}:\n{text}");
+            assert_eq!(
+                (c.detector, c.map, c.aiding),
+                (p.detector, p.map, p.aiding),
+                "{name}:\n{text}"
+            );
         }
     }
 

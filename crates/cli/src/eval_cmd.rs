@@ -6,7 +6,7 @@
 use crate::config_file::{NamedConfig, PRESETS, resolve};
 use crate::exit::BadInput;
 use anyhow::{Context, Result};
-use pcaline::aiding::{AidingConfig, SensorLine};
+use pcaline::aiding::{AidingConfig, AidingMode, SensorLine};
 use pcaline::{LineDetector, LineSegment};
 use pcaline_eval::{
     AidedRun, AidedScore, DetectFn, DetectionCriteria, DetectionEval, evaluate_detectors,
@@ -62,6 +62,10 @@ pub struct EvalArgs {
     /// the UTM-30LX-EW bag (with the first --config, or the default).
     #[arg(long)]
     real: bool,
+    /// Also run the drift grid on Intel (for --real): heading-rate biases
+    /// 0.1, 0.3 and 1°/s, speed errors 2-3%, seeds 1-4, every aiding mode.
+    #[arg(long)]
+    drift_grid: bool,
     /// Seed of the synthetic drift added to the Intel log's poses (for --real).
     #[arg(long, default_value_t = 1)]
     drift_seed: u64,
@@ -113,12 +117,13 @@ struct Report {
 }
 
 /// The aiding modes of the localization table.
-fn aiding_modes() -> [(&'static str, AidingConfig); 4] {
+fn aiding_modes() -> [(&'static str, AidingConfig); 5] {
     [
         ("none", AidingConfig::none()),
         ("paper (eq. 11-14)", AidingConfig::paper()),
         ("heading", AidingConfig::heading()),
         ("full-pose", AidingConfig::full_pose()),
+        ("estimator", AidingConfig::estimator()),
     ]
 }
 
@@ -143,7 +148,12 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
             .unwrap_or_else(|| "../shared/data".into());
         // The first configuration named, or the default.
         let spec = args.configs.first().map_or("default", String::as_str);
-        let report = crate::eval_real::evaluate(&data, args.drift_seed, &resolve(spec, 0.01)?)?;
+        let report = crate::eval_real::evaluate(
+            &data,
+            args.drift_seed,
+            &resolve(spec, 0.01)?,
+            args.drift_grid,
+        )?;
         if args.json {
             println!("{}", serde_json::to_string_pretty(&report)?);
         } else {
@@ -264,7 +274,6 @@ fn localization_rows(
     quiet: bool,
 ) -> Result<Vec<LocalizationRow>> {
     let modes = aiding_modes();
-    let aiding: Vec<AidingConfig> = modes.iter().map(|(_, a)| *a).collect();
     let bar = crate::progress::bar(
         (scenes.len() as u64) * seeds * configs.len() as u64,
         "localization runs",
@@ -272,6 +281,11 @@ fn localization_rows(
     );
     let mut rows = Vec::new();
     for c in configs {
+        // The estimator with the configuration's own settings.
+        let aiding: Vec<AidingConfig> = modes
+            .iter()
+            .map(|(_, a)| if a.mode == AidingMode::Estimator { c.aiding_in(a.mode) } else { *a })
+            .collect();
         let mut pooled: Vec<Pooled> = modes.iter().map(|_| Pooled::default()).collect();
         for scene in scenes {
             for seed in 1..=seeds {
@@ -567,6 +581,58 @@ fn print_real(r: &crate::eval_real::RealReport) {
             t.relations.rotation_mean_deg,
             t.relations.rotation_std_deg
         );
+    }
+    println!();
+    println!(
+        "Own corrected poses as the source: how far each mode moves them (aided minus source)"
+    );
+    println!(
+        "{:<22} {:<26} {:>11} {:>11} {:>9} {:>17} {:>17}",
+        "log", "mode", "heading rms", "heading max", "pos rms", "rel. trans (m)", "rel. rot (deg)"
+    );
+    for m in &r.own_poses {
+        let (t, rot) = m.relations.as_ref().map_or(("-".into(), "-".into()), |r| {
+            (
+                format!("{:.3} ± {:.3}", r.translation_mean_m, r.translation_std_m),
+                format!("{:.3} ± {:.3}", r.rotation_mean_deg, r.rotation_std_deg),
+            )
+        });
+        println!(
+            "{:<22} {:<26} {:>9.3} ° {:>9.3} ° {:>7.3} m {:>17} {:>17}",
+            m.log, m.mode, m.heading_rms_deg, m.heading_max_deg, m.position_rms_m, t, rot
+        );
+    }
+    if !r.drift_grid.is_empty() {
+        println!();
+        println!(
+            "Intel drift grid: corrected poses + synthetic drift, against the corrected poses"
+        );
+        println!(
+            "{:>10} {:>6} {:>5}  {:<26} {:>11} {:>9} {:>17} {:>17}",
+            "bias °/s",
+            "speed",
+            "seed",
+            "mode",
+            "heading rms",
+            "pos rms",
+            "rel. trans (m)",
+            "rel. rot (deg)"
+        );
+        for c in &r.drift_grid {
+            println!(
+                "{:>10.1} {:>5.0}% {:>5}  {:<26} {:>9.3} ° {:>7.3} m {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
+                c.heading_rate_bias_deg_s,
+                100.0 * c.speed_scale_error,
+                c.seed,
+                c.mode,
+                c.heading_rms_deg,
+                c.position_rms_m,
+                c.relations.translation_mean_m,
+                c.relations.translation_std_m,
+                c.relations.rotation_mean_deg,
+                c.relations.rotation_std_deg
+            );
+        }
     }
     println!();
     let u = &r.utm;

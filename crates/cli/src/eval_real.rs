@@ -7,9 +7,12 @@
 
 use crate::config_file::NamedConfig;
 use anyhow::{Context, Result};
-use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
+use pcaline::aiding::{Aiding, AidingConfig, AidingMode, SensorLine};
 use pcaline::{LineDetector, Pose2};
-use pcaline_eval::{RelationErrors, StampedTrajectory, aligned_trajectory_errors, relation_errors};
+use pcaline_eval::{
+    RelationErrors, StampedTrajectory, aligned_trajectory_errors, relation_errors,
+    trajectory_errors,
+};
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
     read_scan_pairs,
@@ -36,11 +39,13 @@ pub const INTEL_DRIFT: OdometryModel = OdometryModel {
 };
 
 /// The aiding modes compared on real data.
-fn modes() -> [(&'static str, AidingConfig); 3] {
+fn modes(config: &NamedConfig) -> [(&'static str, AidingConfig); 5] {
     [
         ("raw", AidingConfig::none()),
+        ("paper-aided (eq. 11-14)", AidingConfig::paper()),
         ("heading-aided", AidingConfig::heading()),
         ("full-pose aided", AidingConfig::full_pose()),
+        ("estimator-aided", config.aiding_in(AidingMode::Estimator)),
     ]
 }
 
@@ -122,6 +127,12 @@ pub struct RealReport {
     /// Intel: the relation metric of the log's own poses, then of the drifted
     /// poses raw and aided.
     pub intel: Vec<TrajectoryRow>,
+    /// Intel and CSAIL with their own corrected poses as the source: how far
+    /// each mode moves them.
+    pub own_poses: Vec<MovedRow>,
+    /// Intel with the drift grid ([`DRIFT_GRID_BIAS_DEG_S`] x
+    /// [`DRIFT_GRID_SEEDS`]); empty unless asked for.
+    pub drift_grid: Vec<DriftCell>,
     /// Intel: the seed of the synthetic drift.
     pub intel_drift_seed: u64,
     /// The UTM-30LX-EW bag.
@@ -129,13 +140,17 @@ pub struct RealReport {
 }
 
 /// Runs every real-data measurement on the datasets folder `data`.
-pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig) -> Result<RealReport> {
+pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<RealReport> {
     let (csail_pairs, csail) = csail(data, config)?;
+    let (intel, mut own_poses, drift_grid) = intel(data, seed, config, grid)?;
+    own_poses.extend(csail_own(data, config)?);
     Ok(RealReport {
         config: config.name.clone(),
         csail_pairs,
         csail,
-        intel: intel(data, seed, config)?,
+        intel,
+        own_poses,
+        drift_grid,
         intel_drift_seed: seed,
         utm: utm_residuals(&data.join("utm30lx-ros2"), config.detector)?,
     })
@@ -152,7 +167,7 @@ impl Loops {
     fn new(config: &NamedConfig) -> Result<Self> {
         Ok(Loops {
             detector: LineDetector::new(config.detector)?,
-            loops: modes()
+            loops: modes(config)
                 .iter()
                 .map(|(_, a)| Aiding::new(*a, config.map))
                 .collect::<Result<_, _>>()?,
@@ -164,7 +179,14 @@ impl Loops {
     fn step(&mut self, scan: &pcaline::Scan, source: &Pose2) -> Vec<Pose2> {
         self.lines.clear();
         self.lines.extend(self.detector.detect(scan).lines.iter().map(SensorLine::from));
-        self.loops.iter_mut().map(|a| a.step(source, &self.lines).0).collect()
+        let lines = &self.lines;
+        self.loops
+            .iter_mut()
+            .map(|a| match scan.stamp_s {
+                Some(t) => a.step_at(t, source, lines).0,
+                None => a.step(source, lines).0,
+            })
+            .collect()
     }
 }
 
@@ -173,7 +195,7 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>
     let dir = data.join("mit-csail");
     let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt"))?;
     let mut loops = Loops::new(config)?;
-    let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); 3];
+    let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); modes(config).len()];
     for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
         let LogRecord::Scan(s) = record? else { continue };
         let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
@@ -191,7 +213,7 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>
         })
         .collect();
     let mut rows = Vec::new();
-    for ((name, _), est) in modes().iter().zip(&poses) {
+    for ((name, _), est) in modes(config).iter().zip(&poses) {
         let picked: Vec<Pose2> = pairs
             .iter()
             .map(|p| {
@@ -216,54 +238,90 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>
 }
 
 /// A record of the Intel log in time order: its time, corrected pose and
-/// the scan if it is one.
+/// the lines of its scan, if it is one (detected once, shared by every run).
 struct IntelRecord {
     time_s: f64,
     pose: Pose2,
-    scan: Option<pcaline::Scan>,
+    lines: Option<Vec<SensorLine>>,
 }
 
-/// Intel: the relation metric of the log's own poses, and of the poses with
-/// the synthetic drift [`INTEL_DRIFT`] (seeded), raw and aided.
-fn intel(data: &Path, seed: u64, config: &NamedConfig) -> Result<Vec<TrajectoryRow>> {
-    let dir = data.join("intel");
-    let relations = read_relations(&dir.join("intel.relations"))?;
+/// How far an aided trajectory moved a log's own poses, when they are fed
+/// as the source (a good source must come out essentially unchanged).
+#[derive(Debug, Serialize)]
+pub struct MovedRow {
+    /// The log.
+    pub log: String,
+    /// The aiding mode.
+    pub mode: String,
+    /// Heading rms of aided minus source, degrees.
+    pub heading_rms_deg: f64,
+    /// Largest heading difference, degrees.
+    pub heading_max_deg: f64,
+    /// Position rms of aided minus source, metres.
+    pub position_rms_m: f64,
+    /// The relation metric of the aided trajectory (Intel only).
+    pub relations: Option<RelationRow>,
+}
+
+/// One cell of the drift grid: Intel's corrected poses (the truth here)
+/// with a synthetic drift, raw and aided.
+#[derive(Debug, Serialize)]
+pub struct DriftCell {
+    /// Heading-rate bias, degrees per second.
+    pub heading_rate_bias_deg_s: f64,
+    /// Speed scale error (0.03 = 3% too long).
+    pub speed_scale_error: f64,
+    /// The drift's seed.
+    pub seed: u64,
+    /// The aiding mode.
+    pub mode: String,
+    /// Heading rms against the corrected poses at the scans, aligned at
+    /// the first scan, degrees.
+    pub heading_rms_deg: f64,
+    /// Position rms against the corrected poses at the scans, aligned at
+    /// the first scan, metres.
+    pub position_rms_m: f64,
+    /// The relation metric.
+    pub relations: RelationRow,
+}
+
+/// The Intel log's records, time-ordered, with each scan's lines.
+fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> {
     let options = CarmenOptions { time_offset_s: INTEL_TIME_OFFSET_S, ..CarmenOptions::default() };
-    let log = dir.join("intel.gfs.log");
+    let log = data.join("intel").join("intel.gfs.log");
+    let mut detector = LineDetector::new(config.detector)?;
     let mut records = Vec::new();
     for record in CarmenReader::open(&log, options)? {
         records.push(match record? {
             LogRecord::Scan(s) => IntelRecord {
                 time_s: s.scan.stamp_s.context("a FLASER line without a timestamp")?,
                 pose: s.pose.context("a FLASER line without a pose")?,
-                scan: Some(s.scan),
+                lines: Some(detector.detect(&s.scan).lines.iter().map(SensorLine::from).collect()),
             },
-            LogRecord::Odometry(o) => IntelRecord { time_s: o.stamp_s, pose: o.pose, scan: None },
+            LogRecord::Odometry(o) => IntelRecord { time_s: o.stamp_s, pose: o.pose, lines: None },
         });
     }
     records.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
-    let score = |poses: &[Pose2]| -> Result<RelationRow> {
-        let stamped = StampedTrajectory::new(
-            records.iter().zip(poses).map(|(r, p)| (r.time_s, *p)).collect(),
-        );
-        Ok(relation_errors(&stamped, &relations, INTEL_TOLERANCE_S)
-            .context("no relation of intel.relations meets a pose of intel.gfs.log")?
-            .into())
-    };
-    let corrected: Vec<Pose2> = records.iter().map(|r| r.pose).collect();
-    let times: Vec<f64> = records.iter().map(|r| r.time_s).collect();
-    let drifted = INTEL_DRIFT.corrupt_stamped(&corrected, &times, seed);
+    Ok(records)
+}
 
-    // Each mode's pose at every record: at a scan, its aiding loop's output;
-    // between scans, the drifted odometry's motion since the last scan
-    // composed onto it.
-    let mut loops = Loops::new(config)?;
-    let mut aided: Vec<Vec<Pose2>> = vec![Vec::new(); 3];
+/// Each mode's pose at every record with `source` (one pose per record) as
+/// the localization source: at a scan, its aiding loop's output; between
+/// scans, the source's motion since the last scan composed onto it.
+fn intel_run(
+    records: &[IntelRecord],
+    source: &[Pose2],
+    config: &NamedConfig,
+) -> Result<Vec<Vec<Pose2>>> {
+    let mut loops: Vec<Aiding> =
+        modes(config).iter().map(|(_, a)| Aiding::new(*a, config.map)).collect::<Result<_, _>>()?;
+    let mut out: Vec<Vec<Pose2>> = vec![Vec::with_capacity(records.len()); loops.len()];
     let mut at_last_scan: Option<(Pose2, Vec<Pose2>)> = None;
-    for (record, source) in records.iter().zip(&drifted) {
-        let poses = match (&record.scan, &at_last_scan) {
-            (Some(scan), _) => {
-                let poses = loops.step(scan, source);
+    for (record, source) in records.iter().zip(source) {
+        let poses: Vec<Pose2> = match (&record.lines, &at_last_scan) {
+            (Some(lines), _) => {
+                let poses: Vec<Pose2> =
+                    loops.iter_mut().map(|a| a.step_at(record.time_s, source, lines).0).collect();
                 at_last_scan = Some((*source, poses.clone()));
                 poses
             }
@@ -271,31 +329,152 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig) -> Result<Vec<TrajectoryR
                 let motion = source_then.between(source);
                 poses.iter().map(|p| p.compose(&motion)).collect()
             }
-            (None, None) => vec![*source; 3],
+            (None, None) => vec![*source; loops.len()],
         };
-        for (out, pose) in aided.iter_mut().zip(poses) {
-            out.push(pose);
+        for (o, pose) in out.iter_mut().zip(poses) {
+            o.push(pose);
         }
     }
-    let mut rows = vec![TrajectoryRow {
-        name: "log's own (GMapping) poses".into(),
+    Ok(out)
+}
+
+/// The relation metric of poses at the Intel records' times.
+fn intel_score(
+    records: &[IntelRecord],
+    relations: &[Relation],
+    poses: &[Pose2],
+) -> Result<RelationRow> {
+    let stamped =
+        StampedTrajectory::new(records.iter().zip(poses).map(|(r, p)| (r.time_s, *p)).collect());
+    Ok(relation_errors(&stamped, relations, INTEL_TOLERANCE_S)
+        .context("no relation of intel.relations meets a pose of intel.gfs.log")?
+        .into())
+}
+
+/// The heading-rate biases of the drift grid, degrees per second.
+pub const DRIFT_GRID_BIAS_DEG_S: [f64; 3] = [0.1, 0.3, 1.0];
+/// The seeds of the drift grid; odd seeds get a 3% speed scale error, even
+/// seeds 2%.
+pub const DRIFT_GRID_SEEDS: [u64; 4] = [1, 2, 3, 4];
+
+/// The drift grid's model: [`INTEL_DRIFT`]'s random walks with the given
+/// heading-rate bias and speed scale error.
+fn drift_model(bias_deg_s: f64, seed: u64) -> OdometryModel {
+    OdometryModel {
+        heading_rate_bias_rad_s: bias_deg_s.to_radians(),
+        speed_scale_error: if seed % 2 == 1 { 0.03 } else { 0.02 },
+        ..INTEL_DRIFT
+    }
+}
+
+/// Intel: the relation metric of the log's own poses, how far each mode
+/// moves them when they are the source, the seeded drift [`INTEL_DRIFT`],
+/// and the drift grid.
+fn intel(
+    data: &Path,
+    seed: u64,
+    config: &NamedConfig,
+    grid: bool,
+) -> Result<(Vec<TrajectoryRow>, Vec<MovedRow>, Vec<DriftCell>)> {
+    let relations = read_relations(&data.join("intel").join("intel.relations"))?;
+    let records = intel_records(data, config)?;
+    let corrected: Vec<Pose2> = records.iter().map(|r| r.pose).collect();
+    let times: Vec<f64> = records.iter().map(|r| r.time_s).collect();
+    let row = |name: String, relations: RelationRow| TrajectoryRow {
+        name,
         heading_rms_deg: None,
         heading_max_deg: None,
         position_rms_m: None,
         position_final_m: None,
-        relations: score(&corrected)?,
-    }];
-    for ((name, _), poses) in modes().iter().zip(&aided) {
-        rows.push(TrajectoryRow {
-            name: format!("drifted, {name}"),
-            heading_rms_deg: None,
-            heading_max_deg: None,
-            position_rms_m: None,
-            position_final_m: None,
-            relations: score(poses)?,
+        relations,
+    };
+    let mut rows = vec![row(
+        "log's own (GMapping) poses".into(),
+        intel_score(&records, &relations, &corrected)?,
+    )];
+    let mut moved = Vec::new();
+    for ((name, _), poses) in modes(config).iter().zip(intel_run(&records, &corrected, config)?) {
+        let e = trajectory_errors(&poses, &corrected).context("no poses")?;
+        moved.push(MovedRow {
+            log: "intel.gfs.log".into(),
+            mode: name.to_string(),
+            heading_rms_deg: e.heading_rms_rad.to_degrees(),
+            heading_max_deg: e.heading_max_rad.to_degrees(),
+            position_rms_m: e.position_rms_m,
+            relations: Some(intel_score(&records, &relations, &poses)?),
         });
     }
-    Ok(rows)
+    let drifted = INTEL_DRIFT.corrupt_stamped(&corrected, &times, seed);
+    for ((name, _), poses) in modes(config).iter().zip(intel_run(&records, &drifted, config)?) {
+        rows.push(row(format!("drifted, {name}"), intel_score(&records, &relations, &poses)?));
+    }
+    let mut cells = Vec::new();
+    if grid {
+        for bias in DRIFT_GRID_BIAS_DEG_S {
+            for s in DRIFT_GRID_SEEDS {
+                let model = drift_model(bias, s);
+                let drifted = model.corrupt_stamped(&corrected, &times, s);
+                for ((name, _), poses) in
+                    modes(config).iter().zip(intel_run(&records, &drifted, config)?)
+                {
+                    // At the scans, aligned at the first scan: the drift
+                    // before it is no aiding's to undo.
+                    let e = aligned_trajectory_errors(
+                        &at_scans(&records, &poses),
+                        &at_scans(&records, &corrected),
+                    )
+                    .context("no scans")?;
+                    cells.push(DriftCell {
+                        heading_rate_bias_deg_s: bias,
+                        speed_scale_error: model.speed_scale_error,
+                        seed: s,
+                        mode: name.to_string(),
+                        heading_rms_deg: e.heading_rms_rad.to_degrees(),
+                        position_rms_m: e.position_rms_m,
+                        relations: intel_score(&records, &relations, &poses)?,
+                    });
+                }
+            }
+        }
+    }
+    Ok((rows, moved, cells))
+}
+
+/// The poses at the records that are scans.
+fn at_scans(records: &[IntelRecord], poses: &[Pose2]) -> Vec<Pose2> {
+    records.iter().zip(poses).filter(|(r, _)| r.lines.is_some()).map(|(_, p)| *p).collect()
+}
+
+/// MIT CSAIL's corrected log with its own poses as the source: how far each
+/// mode moves them.
+fn csail_own(data: &Path, config: &NamedConfig) -> Result<Vec<MovedRow>> {
+    let log = data.join("mit-csail").join("csail.corrected.log");
+    let mut loops = Loops::new(config)?;
+    let mut source = Vec::new();
+    let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); modes(config).len()];
+    for record in CarmenReader::open(&log, CarmenOptions::default())? {
+        let LogRecord::Scan(s) = record? else { continue };
+        let pose = s.pose.context("a FLASER line without a pose")?;
+        source.push(pose);
+        for (out, p) in poses.iter_mut().zip(loops.step(&s.scan, &pose)) {
+            out.push(p);
+        }
+    }
+    modes(config)
+        .iter()
+        .zip(&poses)
+        .map(|((name, _), p)| {
+            let e = trajectory_errors(p, &source).context("no scans in csail.corrected.log")?;
+            Ok(MovedRow {
+                log: "csail.corrected.log".into(),
+                mode: name.to_string(),
+                heading_rms_deg: e.heading_rms_rad.to_degrees(),
+                heading_max_deg: e.heading_max_rad.to_degrees(),
+                position_rms_m: e.position_rms_m,
+                relations: None,
+            })
+        })
+        .collect()
 }
 
 /// Per-line residual std of the detector `config` on a real log.

@@ -8,8 +8,8 @@ use crate::progress;
 use crate::svg::Plot;
 use anyhow::Result;
 use clap::ValueEnum;
-use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
-use pcaline::{LineDetector, Pose2};
+use pcaline::LineDetector;
+use pcaline::aiding::{Aiding, AidingMode, SensorLine};
 use pcaline_io::{LogRecord, read_log, write_json, write_map_csv, write_map_json};
 use serde::Serialize;
 use std::ops::ControlFlow;
@@ -22,8 +22,10 @@ pub enum AidingArg {
     None,
     /// Heading (the paper's eq. 11-14).
     Heading,
-    /// Heading and translation.
+    /// Heading and translation, each scan's correction in full.
     Full,
+    /// The estimator: odometry and line matches fused by their uncertainty.
+    Estimator,
 }
 
 /// Arguments of `pcaline map`.
@@ -37,7 +39,7 @@ pub struct MapArgs {
     #[arg(long, default_value = "default")]
     config: String,
     /// Aiding.
-    #[arg(long, value_enum, default_value_t = AidingArg::Full)]
+    #[arg(long, value_enum, default_value_t = AidingArg::Estimator)]
     aiding: AidingArg,
     /// Output folder.
     #[arg(long, default_value = "out/map")]
@@ -65,9 +67,10 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     }
     let config = crate::config_file::resolve(&args.config, 0.01)?;
     let aiding_config = match args.aiding {
-        AidingArg::None => AidingConfig::none(),
-        AidingArg::Heading => config.heading_aiding(),
-        AidingArg::Full => AidingConfig::full_pose(),
+        AidingArg::None => config.aiding_in(AidingMode::None),
+        AidingArg::Heading => config.aiding_in(AidingMode::Heading),
+        AidingArg::Full => config.aiding_in(AidingMode::FullPose),
+        AidingArg::Estimator => config.aiding_in(AidingMode::Estimator),
     };
     let mut detector = LineDetector::new(config.detector)?;
     let mut aiding = Aiding::new(aiding_config, config.map)?;
@@ -80,13 +83,14 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         lines.clear();
         lines.extend(detector.detect(&s.scan).lines.iter().map(SensorLine::from));
         let source = s.odometry.or(s.pose);
-        let (pose, report) = match source {
-            Some(p) => aiding.step(&p, &lines),
-            None => {
-                // No motion source: each scan is assumed taken where the
-                // last one was, and the aiding alone moves the estimate.
+        let (pose, report) = match (source, s.scan.stamp_s) {
+            (Some(p), Some(t)) => aiding.step_at(t, &p, &lines),
+            (Some(p), None) => aiding.step(&p, &lines),
+            (None, stamp) => {
+                // No motion source: LIDAR-only mode, the last estimated
+                // motion repeated as the prediction, the lines estimating it.
                 without_odometry += 1;
-                aiding.step_increment(&Pose2::identity(), &lines)
+                aiding.step_without_source(stamp, &lines)
             }
         };
         poses.push(PoseOut {
@@ -123,7 +127,10 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             poses.len(),
             aiding.map().len(),
             if without_odometry > 0 {
-                format!(", {without_odometry} scans without odometry (assumed not moving)")
+                format!(
+                    ", {without_odometry} scans without odometry (LIDAR-only mode: \
+                     constant-velocity prediction, motion from the line matches)"
+                )
             } else {
                 String::new()
             }

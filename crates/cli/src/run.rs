@@ -1,7 +1,7 @@
 //! `pcaline run`: the main job on a simulated scene. Every scan is simulated
 //! and its lines detected once; three mapping loops then run side by side:
 //! without aiding, with heading aiding (the paper's section 2.1) and with
-//! full-pose aiding. The summary compares their errors against the truth;
+//! the estimator (odometry and line matches fused by their uncertainty). The summary compares their errors against the truth;
 //! pictures and JSON go to the output folder.
 
 use crate::exit::BadInput;
@@ -10,7 +10,7 @@ use crate::progress;
 use crate::scene_cmd::draw_scene;
 use crate::svg::Plot;
 use anyhow::{Context, Result};
-use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
+use pcaline::aiding::{Aiding, AidingConfig, AidingMode, SensorLine};
 use pcaline::{LineDetector, LineSegment, Pose2};
 use pcaline_eval::{AidedRun, AidedScore};
 use pcaline_io::{LineRecord, parse_scene, read_scene, write_json, write_map_csv, write_map_json};
@@ -48,7 +48,7 @@ pub struct RunArgs {
 }
 
 /// The three loops compared.
-const MODES: [&str; 3] = ["unaided", "heading", "full-pose"];
+const MODES: [&str; 3] = ["unaided", "heading", "estimator"];
 
 #[derive(Debug, Serialize)]
 struct ModeSummary {
@@ -84,7 +84,7 @@ struct ScanRecord {
     true_pose: [f64; 3],
     odometry_pose: [f64; 3],
     heading_aided_pose: [f64; 3],
-    full_pose_aided_pose: [f64; 3],
+    estimator_pose: [f64; 3],
     /// Lines in the sensor frame (the schema of `pcaline detect`).
     lines: Vec<LineRecord>,
 }
@@ -112,7 +112,11 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         Simulator::new(&scene, args.seed).map_err(|e| BadInput(format!("{scene_name}: {e}")))?;
     let config = crate::config_file::resolve(&args.config, 0.01)?;
     let mut detector = LineDetector::new(config.detector)?;
-    let aiding_configs = [AidingConfig::none(), config.heading_aiding(), AidingConfig::full_pose()];
+    let aiding_configs = [
+        AidingConfig::none(),
+        config.heading_aiding(),
+        config.aiding_in(AidingMode::Estimator),
+    ];
 
     let bar = progress::bar(sim.len() as u64, "scans", quiet);
     let mut records = Vec::with_capacity(sim.len());
@@ -137,7 +141,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
             odometry_pose: pose_array(&frame.odometry_pose),
             // Filled in from the loops' estimates once the run is over.
             heading_aided_pose: [f64::NAN; 3],
-            full_pose_aided_pose: [f64::NAN; 3],
+            estimator_pose: [f64::NAN; 3],
             lines: detection
                 .lines
                 .iter()
@@ -151,7 +155,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let estimates = &run.estimates;
     for (k, record) in records.iter_mut().enumerate() {
         record.heading_aided_pose = pose_array(&estimates[1][k]);
-        record.full_pose_aided_pose = pose_array(&estimates[2][k]);
+        record.estimator_pose = pose_array(&estimates[2][k]);
     }
     let full = &run.loops[2];
 
@@ -245,11 +249,11 @@ fn draw_map(scene: &Scene, sim: &Simulator, full: &Aiding, est: &[Vec<Pose2>]) -
     plot.polyline(&path(sim.true_poses()), "#2ca02c", 3.0, false);
     plot.polyline(&path(&est[2]), "#9467bd", 1.5, false);
     plot.legend("true walls", "#bbbbbb", false);
-    plot.legend("line map (full-pose aiding)", "#d62728", false);
+    plot.legend("line map (estimator)", "#d62728", false);
     plot.legend("odometry (unaided)", "#1f77b4", false);
     plot.legend("heading-aided", "#ff7f0e", false);
     plot.legend("true trajectory", "#2ca02c", false);
-    plot.legend("full-pose aided", "#9467bd", false);
+    plot.legend("estimator", "#9467bd", false);
     plot.finish(&format!("{}: line map and trajectories", scene.name))
 }
 
@@ -281,7 +285,7 @@ fn draw_heading(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
         ("true", "#2ca02c", 3.0),
         ("odometry (unaided)", "#1f77b4", 1.5),
         ("heading-aided", "#ff7f0e", 1.5),
-        ("full-pose aided", "#9467bd", 1.5),
+        ("estimator", "#9467bd", 1.5),
     ];
     for (s, (name, color, width)) in all.iter().zip(styles) {
         plot.polyline(s, color, width, name.starts_with("odometry"));
@@ -316,7 +320,7 @@ fn draw_heading_error(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
     let styles = [
         ("odometry (unaided)", "#1f77b4"),
         ("heading-aided", "#ff7f0e"),
-        ("full-pose aided", "#9467bd"),
+        ("estimator", "#9467bd"),
     ];
     for (s, (name, color)) in all.iter().zip(styles) {
         plot.polyline(s, color, 1.5, false);

@@ -246,11 +246,14 @@ fn eval_compares_two_configurations_side_by_side() {
     let recall = |k: usize| detection[k]["recall"].as_f64().unwrap();
     assert_eq!(detection[2]["config"], "oracle");
     assert!(recall(2) >= recall(0) && recall(2) >= recall(1), "{detection:?}");
-    // Four aiding modes per configuration; full-pose aiding bounds the drift.
+    // Five aiding modes per configuration; full-pose aiding and the
+    // estimator bound the drift.
     let localization = v["localization"].as_array().unwrap();
-    assert_eq!(localization.len(), 8);
-    let full = localization.iter().find(|r| r["config"] == "default" && r["aiding"] == "full-pose");
-    assert!(full.unwrap()["position_rms_m"].as_f64().unwrap() < 0.05, "{full:?}");
+    assert_eq!(localization.len(), 10);
+    for mode in ["full-pose", "estimator"] {
+        let row = localization.iter().find(|r| r["config"] == "default" && r["aiding"] == mode);
+        assert!(row.unwrap()["position_rms_m"].as_f64().unwrap() < 0.05, "{row:?}");
+    }
     let none = &localization[0];
     assert!(none["heading_rms_deg"].as_f64().unwrap() > 1.0, "{none}");
 

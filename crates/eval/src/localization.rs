@@ -52,7 +52,7 @@ impl AidedRun {
         for frame in sim.frames() {
             let lines = lines_of(&frame);
             for (aiding, out) in loops.iter_mut().zip(estimates.iter_mut()) {
-                out.push(aiding.step(&frame.odometry_pose, &lines).0);
+                out.push(aiding.step_at(frame.time_s, &frame.odometry_pose, &lines).0);
             }
             visible.observe(&frame);
         }
