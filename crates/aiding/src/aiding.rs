@@ -72,6 +72,8 @@ pub struct Aiding {
     last_motion: Option<Pose2>,
     /// The factor on the motion noise's variances ([`crate::NoiseAdaptation`]).
     motion_noise_scale: f64,
+    /// The factor on the matches' covariances.
+    measurement_noise_scale: f64,
     /// The time since the previous scan, when both were stamped.
     step_dt_s: Option<f64>,
     /// The source's systematic errors.
@@ -100,6 +102,7 @@ impl Aiding {
             last_stamp_s: None,
             last_motion: None,
             motion_noise_scale: 1.0,
+            measurement_noise_scale: 1.0,
             step_dt_s: None,
             calibration: SourceCalibration::new(
                 &config.estimator.calibration.unwrap_or(CalibrationConfig::standard()),
@@ -318,6 +321,7 @@ impl Aiding {
         self.corrected = Some(pose);
         report.covariance = self.covariance;
         report.motion_noise_scale = self.motion_noise_scale;
+        report.measurement_noise_scale = self.measurement_noise_scale;
         (pose, report)
     }
 
@@ -337,6 +341,7 @@ impl Aiding {
             return (predicted, report, true);
         }
         let e = self.config.estimator;
+        let r_scale = self.measurement_noise_scale;
         let viewpoint = Point2::new(predicted.x, predicted.y);
         let sigma_heading = predicted_cov[(2, 2)].max(0.0).sqrt();
         let sigma_position = (predicted_cov[(0, 0)] + predicted_cov[(1, 1)]).max(0.0).sqrt();
@@ -367,6 +372,7 @@ impl Aiding {
                     return;
                 }
                 let mut meas = measure(&sensor.line, map_line, &predicted, &e.measurement);
+                meas.covariance *= r_scale;
                 if tentative {
                     meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
                 }
@@ -431,6 +437,7 @@ impl Aiding {
                 .map(|&(i, j)| {
                     let map_line = &map.lines()[j];
                     let mut meas = measure(&lines[i].line, map_line, pose, &e.measurement);
+                    meas.covariance *= r_scale;
                     if map_line.status == LineStatus::Tentative {
                         meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
                     }
@@ -446,6 +453,10 @@ impl Aiding {
         if let Some(a) = e.adaptation {
             self.motion_noise_scale =
                 a.next(self.motion_noise_scale, update.correction_distance2, update.correction_dof);
+        }
+        if let Some(a) = e.measurement_adaptation {
+            self.measurement_noise_scale =
+                a.next_mean(self.measurement_noise_scale, update.residual2, update.residual_dof);
         }
         if update.correction_distance2 > e.innovation_chi2 {
             // Refused: keep the prediction, widen its uncertainty by the excess.
@@ -612,6 +623,7 @@ impl Default for StepReport {
             covariance: Matrix3::zeros(),
             correction_distance2: 0.0,
             motion_noise_scale: 1.0,
+            measurement_noise_scale: 1.0,
             heading_correction_rad: 0.0,
             translation_correction_m: Vector2::zeros(),
             constrained_directions: 0,

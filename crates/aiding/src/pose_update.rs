@@ -174,6 +174,13 @@ pub struct PoseUpdate {
     /// The directions the matches constrain (the statistic's degrees of
     /// freedom, 1 to 3).
     pub correction_dof: usize,
+    /// Sum over the matches of their squared Mahalanobis residuals at the
+    /// corrected pose, under their own covariances (without Huber's
+    /// weights): what the matches scatter about the solution.
+    pub residual2: f64,
+    /// Its degrees of freedom: two per match less the constrained
+    /// directions (at least 1).
+    pub residual_dof: usize,
 }
 
 /// The iterated EKF update (Gauss-Newton on prior plus matches, relinearised
@@ -210,9 +217,21 @@ pub fn iterated_update(
             break;
         }
     }
+    let at_solution = measure(&pose);
+    let residual2 = at_solution
+        .iter()
+        .map(|m| {
+            m.covariance
+                .try_inverse()
+                .map_or(0.0, |w| (m.residual.transpose() * w * m.residual)[(0, 0)])
+        })
+        .sum();
+    let residual_dof = (2 * at_solution.len()).saturating_sub(correction_dof).max(1);
     (pose.is_finite() && covariance.iter().all(|v| v.is_finite())).then_some(PoseUpdate {
         pose,
         covariance,
+        residual2,
+        residual_dof,
         correction_distance2,
         correction_dof,
     })

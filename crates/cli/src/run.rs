@@ -112,11 +112,8 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         Simulator::new(&scene, args.seed).map_err(|e| BadInput(format!("{scene_name}: {e}")))?;
     let config = crate::config_file::resolve(&args.config, 0.01)?;
     let mut detector = LineDetector::new(config.detector)?;
-    let aiding_configs = [
-        AidingConfig::none(),
-        config.heading_aiding(),
-        config.aiding_in(AidingMode::Estimator),
-    ];
+    let aiding_configs =
+        [AidingConfig::none(), config.heading_aiding(), config.aiding_in(AidingMode::Estimator)];
 
     let bar = progress::bar(sim.len() as u64, "scans", quiet);
     let mut records = Vec::with_capacity(sim.len());
@@ -317,11 +314,8 @@ fn draw_heading_error(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
     let t_end = sim.len() as f64 * dt;
     let mut plot =
         Plot::chart([0.0, lo], [t_end, hi], 1000.0, 420.0, ["time (s)", "heading error (°)"]);
-    let styles = [
-        ("odometry (unaided)", "#1f77b4"),
-        ("heading-aided", "#ff7f0e"),
-        ("estimator", "#9467bd"),
-    ];
+    let styles =
+        [("odometry (unaided)", "#1f77b4"), ("heading-aided", "#ff7f0e"), ("estimator", "#9467bd")];
     for (s, (name, color)) in all.iter().zip(styles) {
         plot.polyline(s, color, 1.5, false);
         plot.legend(name, color, false);
