@@ -5,7 +5,9 @@ use crate::Config;
 use pcaline_fitting::{
     Moments, Piece, is_elongated, line_from_eigen, merge_adjacent, refine_boundaries,
 };
-use pcaline_geometry::{BearingTable, ConfigError, LineSegment, RangeNoise, Scan, ScanPoints};
+use pcaline_geometry::{
+    BearingTable, ConfigError, LineSegment, Pose2, RangeNoise, Scan, ScanPoints,
+};
 use pcaline_segmentation::{
     Level2Rule, NoiseScratch, derivative_peak_split, estimate_range_noise, level1_clusters,
     seam_start, split_at_farthest,
@@ -126,7 +128,20 @@ impl LineDetector {
 
     /// Detects the lines of one scan (paper section 2).
     pub fn detect(&mut self, scan: &Scan) -> Detection<'_> {
+        self.detect_moving(scan, None)
+    }
+
+    /// As [`LineDetector::detect`], for a scan taken while the sensor moved
+    /// with `velocity` (metres and radians per second, in the sensor frame):
+    /// with the scan's beam period ([`Scan::beam_period_s`]) known, every
+    /// point is first placed in the frame of the first beam
+    /// ([`ScanPoints::deskew`]). Without a velocity or a beam period, the
+    /// same as [`LineDetector::detect`].
+    pub fn detect_moving(&mut self, scan: &Scan, velocity: Option<&Pose2>) -> Detection<'_> {
         self.points.fill_from(scan, &mut self.table);
+        if let (Some(v), Some(dt)) = (velocity, scan.beam_period_s()) {
+            self.points.deskew(v, dt);
+        }
         let mut config = self.config;
         self.noise = None;
         if let (Some(estimation), Some(nominal)) =

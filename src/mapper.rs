@@ -111,9 +111,12 @@ impl Mapper {
         MapperStep { pose, lines: self.lines.len(), report }
     }
 
+    /// Detects the scan's lines, deskewed with the velocity estimated over
+    /// the last step when the scan carries its beam timing.
     fn detect(&mut self, scan: &Scan) {
         self.lines.clear();
-        let detection = self.detector.detect(scan);
+        let velocity = self.aiding.velocity();
+        let detection = self.detector.detect_moving(scan, velocity.as_ref());
         self.lines.extend(detection.lines.iter().map(SensorLine::from));
     }
 

@@ -74,8 +74,13 @@ pub struct Aiding {
     motion_noise_scale: f64,
     /// The factor on the matches' covariances.
     measurement_noise_scale: f64,
-    /// The time since the previous scan, when both were stamped.
+    /// The time since the previous scan, when both were stamped (consumed
+    /// by the calibration).
     step_dt_s: Option<f64>,
+    /// The same, kept for the velocity.
+    last_dt_s: Option<f64>,
+    /// The estimated velocity over the last step.
+    velocity: Option<Pose2>,
     /// The source's systematic errors.
     calibration: SourceCalibration,
     /// The predicted step in the world frame (for the calibration).
@@ -104,6 +109,8 @@ impl Aiding {
             motion_noise_scale: 1.0,
             measurement_noise_scale: 1.0,
             step_dt_s: None,
+            last_dt_s: None,
+            velocity: None,
             calibration: SourceCalibration::new(
                 &config.estimator.calibration.unwrap_or(CalibrationConfig::standard()),
             ),
@@ -139,6 +146,13 @@ impl Aiding {
         &self.calibration
     }
 
+    /// The velocity estimated over the last step (metres and radians per
+    /// second, in the frame of the pose before it), when both scans were
+    /// stamped: what motion deskew of the next scan uses.
+    pub fn velocity(&self) -> Option<Pose2> {
+        self.velocity
+    }
+
     /// What the last step of the estimator did with each line.
     pub fn associations(&self) -> &[Association] {
         &self.associations
@@ -149,6 +163,13 @@ impl Aiding {
     /// motion since its previous pose is composed onto the corrected pose;
     /// the first pose is taken as it is.
     pub fn step(&mut self, source_pose: &Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
+        self.step_dt_s = None;
+        self.last_dt_s = None;
+        self.step_source(source_pose, lines)
+    }
+
+    /// [`Aiding::step`] with the step's duration already recorded.
+    fn step_source(&mut self, source_pose: &Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
         let dt = self.step_dt_s.take();
         if !source_pose.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
@@ -182,7 +203,7 @@ impl Aiding {
             }
             return out;
         }
-        self.step(source_pose, lines)
+        self.step_source(source_pose, lines)
     }
 
     /// Processes one scan without a localization source (LIDAR-only mode):
@@ -263,6 +284,7 @@ impl Aiding {
             return true;
         }
         self.step_dt_s = self.last_stamp_s.map(|last| stamp_s - last);
+        self.last_dt_s = self.step_dt_s;
         self.last_stamp_s = Some(stamp_s);
         false
     }
@@ -318,6 +340,10 @@ impl Aiding {
             }
         }
         self.last_motion = previous.map(|p| p.between(&pose));
+        self.velocity = match (previous, self.last_dt_s) {
+            (Some(p), Some(dt)) => p.velocity_to(&pose, dt),
+            _ => None,
+        };
         self.corrected = Some(pose);
         report.covariance = self.covariance;
         report.motion_noise_scale = self.motion_noise_scale;

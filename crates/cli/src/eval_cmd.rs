@@ -291,8 +291,9 @@ fn localization_rows(
             for seed in 1..=seeds {
                 let sim = Simulator::new(scene, seed).map_err(|e| BadInput(e.to_string()))?;
                 let mut detector = LineDetector::new(c.detector)?;
-                let run = AidedRun::run(&sim, c.map, &aiding, |frame| {
-                    detector.detect(&frame.scan).lines.iter().map(SensorLine::from).collect()
+                let run = AidedRun::run(&sim, c.map, &aiding, |frame, velocity| {
+                    let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
+                    detection.lines.iter().map(SensorLine::from).collect()
                 })?;
                 let scores = run.scores(sim.true_poses()).context("a scene without scans")?;
                 for (p, s) in pooled.iter_mut().zip(&scores) {

@@ -81,7 +81,12 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     read_log(&args.log, &args.input.options(), |record| {
         let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
         lines.clear();
-        lines.extend(detector.detect(&s.scan).lines.iter().map(SensorLine::from));
+        // Deskewed with the velocity of the last step, when the scan has its
+        // beam timing (ROS time_increment).
+        let velocity = aiding.velocity();
+        lines.extend(
+            detector.detect_moving(&s.scan, velocity.as_ref()).lines.iter().map(SensorLine::from),
+        );
         let source = s.odometry.or(s.pose);
         let (pose, report) = match (source, s.scan.stamp_s) {
             (Some(p), Some(t)) => aiding.step_at(t, &p, &lines),

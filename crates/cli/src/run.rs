@@ -121,9 +121,9 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let mut line_count = 0usize;
     let mut detect_time = 0.0;
     let mut drawn: Vec<LineSegment> = Vec::new();
-    let run = AidedRun::run(&sim, config.map, &aiding_configs, |frame| {
+    let run = AidedRun::run(&sim, config.map, &aiding_configs, |frame, velocity| {
         let t0 = Instant::now();
-        let detection = detector.detect(&frame.scan);
+        let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
         detect_time += t0.elapsed().as_secs_f64();
         let sensor_lines: Vec<SensorLine> = detection.lines.iter().map(SensorLine::from).collect();
         line_count += sensor_lines.len();

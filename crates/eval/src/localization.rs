@@ -36,21 +36,26 @@ pub struct AidedScore {
 
 impl AidedRun {
     /// Runs every frame of `sim` through `lines_of` (a detector: the frame's
-    /// lines in the sensor frame) and feeds the lines, with the frame's
+    /// lines in the sensor frame, given the source's velocity over the last
+    /// step for motion deskew) and feeds the lines, with the frame's
     /// odometry pose as the source, to one loop per configuration in `modes`,
     /// each with its own map built with `map`.
     pub fn run(
         sim: &Simulator,
         map: MapConfig,
         modes: &[AidingConfig],
-        mut lines_of: impl FnMut(&SimFrame) -> Vec<SensorLine>,
+        mut lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
     ) -> Result<Self, ConfigError> {
         let mut loops =
             modes.iter().map(|a| Aiding::new(*a, map)).collect::<Result<Vec<_>, _>>()?;
         let mut estimates: Vec<Vec<Pose2>> = modes.iter().map(|_| Vec::new()).collect();
         let mut visible = VisibleWalls::new(sim.world().walls(), 0.05);
+        let mut last: Option<(f64, Pose2)> = None;
         for frame in sim.frames() {
-            let lines = lines_of(&frame);
+            let velocity =
+                last.and_then(|(t, p)| p.velocity_to(&frame.odometry_pose, frame.time_s - t));
+            last = Some((frame.time_s, frame.odometry_pose));
+            let lines = lines_of(&frame, velocity);
             for (aiding, out) in loops.iter_mut().zip(estimates.iter_mut()) {
                 out.push(aiding.step_at(frame.time_s, &frame.odometry_pose, &lines).0);
             }
@@ -107,7 +112,7 @@ mod tests {
             &sim,
             MapConfig::default(),
             &[AidingConfig::none(), AidingConfig::full_pose()],
-            |frame| {
+            |frame, _| {
                 frame
                     .wall_runs(10)
                     .iter()

@@ -73,6 +73,19 @@ impl Pose2 {
         Pose2::new(-(c * self.x + s * self.y), s * self.x - c * self.y, -self.heading)
     }
 
+    /// The constant velocity that moves `self` to `other` in `dt_s`
+    /// seconds: the increment divided by the time, in `self`'s frame
+    /// (metres and radians per second; first order in the turn). `None`
+    /// for a time that is not positive and finite.
+    pub fn velocity_to(&self, other: &Pose2, dt_s: f64) -> Option<Pose2> {
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return None;
+        }
+        let inc = self.between(other);
+        let v = Pose2 { x: inc.x / dt_s, y: inc.y / dt_s, heading: inc.heading / dt_s };
+        v.is_finite().then_some(v)
+    }
+
     /// The relative pose `self^-1 * other`: `other` expressed in `self`'s frame
     /// (an odometry increment from `self` to `other`).
     pub fn between(&self, other: &Pose2) -> Pose2 {

@@ -25,8 +25,14 @@ pub struct Scan {
     pub ranges: Vec<f32>,
     /// Optional intensities, one per beam when present.
     pub intensities: Option<Vec<f32>>,
-    /// Optional acquisition time in seconds.
+    /// Optional acquisition time in seconds (of the first beam, as ROS
+    /// stamps a `LaserScan`).
     pub stamp_s: Option<f64>,
+    /// Time between two consecutive beams in seconds (ROS
+    /// `time_increment`), when the format carries it; what motion deskew
+    /// needs ([`crate::ScanPoints::deskew`]). `None`, zero or non-finite:
+    /// unknown.
+    pub time_increment_s: Option<f64>,
 }
 
 impl Scan {
@@ -46,7 +52,21 @@ impl Scan {
             ranges,
             intensities: None,
             stamp_s: None,
+            time_increment_s: None,
         }
+    }
+
+    /// Sets the time between consecutive beams in seconds.
+    pub fn with_time_increment(mut self, time_increment_s: f64) -> Self {
+        self.time_increment_s = Some(time_increment_s);
+        self
+    }
+
+    /// The time between consecutive beams when it is known and usable
+    /// (finite, positive, and the whole sweep at most a second).
+    pub fn beam_period_s(&self) -> Option<f64> {
+        self.time_increment_s
+            .filter(|t| t.is_finite() && *t > 0.0 && *t * self.ranges.len() as f64 <= 1.0)
     }
 
     /// Sets the acquisition time in seconds.

@@ -74,7 +74,7 @@ fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
     let angle_min = c.f32("angle_min")?;
     let _angle_max = c.f32("angle_max")?;
     let angle_increment = c.f32("angle_increment")?;
-    let _time_increment = c.f32("time_increment")?;
+    let time_increment = c.f32("time_increment")?;
     let _scan_time = c.f32("scan_time")?;
     let range_min = c.f32("range_min")?;
     let range_max = c.f32("range_max")?;
@@ -84,6 +84,9 @@ fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
         Scan::new(angle_min, angle_increment, range_min, range_max, ranges).with_stamp(stamp_s);
     if !intensities.is_empty() {
         scan.intensities = Some(intensities);
+    }
+    if time_increment.is_finite() && time_increment != 0.0 {
+        scan.time_increment_s = Some(f64::from(time_increment.abs()));
     }
     Ok(scan)
 }

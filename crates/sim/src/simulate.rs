@@ -257,6 +257,9 @@ impl Simulator {
             ranges,
         )
         .with_stamp(time_s);
+        // A sweep taken over time says so, as a real driver does; without
+        // motion skew every beam is taken at the first beam's pose.
+        let scan = if s.motion_skew { scan.with_time_increment(s.beam_period_s()) } else { scan };
         (scan, beams)
     }
 
