@@ -8,8 +8,8 @@ use crate::{
     NormalConstraint, Prediction, SourceCalibration, StepReport,
 };
 use crate::{
-    gate_distance2, heading_correction, iterated_update, joint_consistent, measure, predict,
-    rotate_step, solve_translation, weighted_offset,
+    MotionNoise, gate_distance2, heading_correction, iterated_update, joint_consistent, measure,
+    predict, rotate_step, solve_translation, weighted_offset,
 };
 use pcaline_fitting::Moments;
 use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Vector2};
@@ -79,8 +79,10 @@ pub struct Aiding {
     step_dt_s: Option<f64>,
     /// The same, kept for the velocity.
     last_dt_s: Option<f64>,
-    /// The estimated velocity over the last step.
+    /// The estimated velocity over the last step, smoothed (for deskew).
     velocity: Option<Pose2>,
+    /// The same over the last step alone (for the constant-velocity prediction).
+    last_velocity: Option<Pose2>,
     /// The source's systematic errors.
     calibration: SourceCalibration,
     /// The predicted step in the world frame (for the calibration).
@@ -111,6 +113,7 @@ impl Aiding {
             step_dt_s: None,
             last_dt_s: None,
             velocity: None,
+            last_velocity: None,
             calibration: SourceCalibration::new(
                 &config.estimator.calibration.unwrap_or(CalibrationConfig::standard()),
             ),
@@ -228,9 +231,24 @@ impl Aiding {
                 lines,
             );
         };
-        let motion = self.last_motion.unwrap_or_default();
-        let noise = self.config.estimator.constant_velocity;
-        let (predicted, cov) = predict(&previous, &self.covariance, &motion, &noise);
+        let e = &self.config.estimator;
+        let (motion, noise, velocity_error) = match (self.last_velocity, self.last_dt_s) {
+            // Stamped: the velocity over the scan's own duration, wrong by at
+            // most the largest acceleration over it, plus the error of a
+            // velocity differenced from two estimated poses.
+            (Some(v), Some(dt)) if dt > 0.0 => {
+                let motion = Pose2::new(v.x * dt, v.y * dt, v.heading * dt);
+                let a = e.max_acceleration;
+                let noise = MotionNoise::floors(
+                    (a.linear_m_s2 * dt * dt).max(1e-3),
+                    (a.angular_rad_s2 * dt * dt).max(1e-3),
+                );
+                (motion, noise, 2.0)
+            }
+            _ => (self.last_motion.unwrap_or_default(), e.constant_velocity, 0.0),
+        };
+        let (predicted, mut cov) = predict(&previous, &self.covariance, &motion, &noise);
+        cov += self.covariance * velocity_error;
         self.process(predicted, cov, Prediction::ConstantVelocity, None, lines)
     }
 
@@ -340,9 +358,20 @@ impl Aiding {
             }
         }
         self.last_motion = previous.map(|p| p.between(&pose));
-        self.velocity = match (previous, self.last_dt_s) {
+        // Smoothed over about four steps: a velocity differenced from two
+        // estimated poses carries both poses' errors divided by the step.
+        let raw = match (previous, self.last_dt_s) {
             (Some(p), Some(dt)) => p.velocity_to(&pose, dt),
             _ => None,
+        };
+        self.last_velocity = raw;
+        self.velocity = match (self.velocity, raw) {
+            (Some(v), Some(r)) => Some(Pose2 {
+                x: 0.75 * v.x + 0.25 * r.x,
+                y: 0.75 * v.y + 0.25 * r.y,
+                heading: 0.75 * v.heading + 0.25 * r.heading,
+            }),
+            (_, r) => r,
         };
         self.corrected = Some(pose);
         report.covariance = self.covariance;

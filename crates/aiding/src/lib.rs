@@ -77,8 +77,13 @@ pub struct EstimatorConfig {
     /// The localization source's motion noise.
     pub motion: MotionNoise,
     /// The prediction's noise when there is no source (LIDAR-only mode: the
-    /// last estimated motion repeated), or when the source jumped.
+    /// last estimated motion repeated) and the scans are not stamped, or
+    /// when the source jumped.
     pub constant_velocity: MotionNoise,
+    /// LIDAR-only mode with stamped scans: the last estimated velocity
+    /// carried over the scan's duration, wrong by at most these
+    /// accelerations.
+    pub max_acceleration: Acceleration,
     /// The floors of a match's covariance.
     pub measurement: MeasurementNoise,
     /// A match is a candidate when its squared Mahalanobis distance under
@@ -133,6 +138,18 @@ pub struct EstimatorConfig {
     pub max_source_step_m: f64,
     /// A source turn larger than this between two scans is a jump, radians.
     pub max_source_turn_rad: f64,
+}
+
+/// The largest accelerations of a sensor carried without a motion source
+/// (one standard deviation of the constant-velocity prediction's error).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct Acceleration {
+    /// Linear, metres per second squared.
+    pub linear_m_s2: f64,
+    /// Angular, radians per second squared.
+    pub angular_rad_s2: f64,
 }
 
 /// Innovation-based adaptation of the motion noise (Mehra 1970; Mohamed
@@ -201,6 +218,7 @@ impl EstimatorConfig {
         EstimatorConfig {
             motion: MotionNoise::wheel_odometry(),
             constant_velocity: MotionNoise::constant_velocity(),
+            max_acceleration: Acceleration { linear_m_s2: 5.0, angular_rad_s2: 10.0 },
             measurement: MeasurementNoise::standard(),
             gate_chi2: 13.8,
             consensus_chi2: 9.21,
@@ -237,6 +255,8 @@ impl EstimatorConfig {
             ("max_gate_alpha_rad", self.max_gate_alpha_rad),
             ("max_gate_offset_m", self.max_gate_offset_m),
             ("max_source_step_m", self.max_source_step_m),
+            ("max_acceleration.linear_m_s2", self.max_acceleration.linear_m_s2),
+            ("max_acceleration.angular_rad_s2", self.max_acceleration.angular_rad_s2),
             ("max_source_turn_rad", self.max_source_turn_rad),
         ] {
             ConfigError::check_field(

@@ -69,6 +69,19 @@ impl MotionNoise {
         }
     }
 
+    /// A model with floors only: every step, whatever its size, is wrong by
+    /// `translation_m` and `rotation_rad` (one standard deviation).
+    pub const fn floors(translation_m: f64, rotation_rad: f64) -> Self {
+        MotionNoise {
+            translation_per_m: 0.0,
+            translation_per_rad: 0.0,
+            rotation_per_rad: 0.0,
+            rotation_per_m: 0.0,
+            translation_floor_m: translation_m,
+            rotation_floor_rad: rotation_rad,
+        }
+    }
+
     /// The model with every variance times `factor` (standard deviations
     /// times its square root).
     pub fn scaled(&self, factor: f64) -> Self {

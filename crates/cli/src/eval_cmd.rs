@@ -649,4 +649,10 @@ fn print_real(r: &crate::eval_real::RealReport) {
         p90 * 1e3,
         100.0 * u.fraction_under_2cm
     );
+    println!(
+        "LIDAR-only sharpness (occupied 5 cm cells, fewer is sharper): estimator {}, estimator without deskew {}, every scan at the first pose {}",
+        u.occupied_cells_lidar_only,
+        u.occupied_cells_lidar_only_without_deskew,
+        u.occupied_cells_not_moving
+    );
 }

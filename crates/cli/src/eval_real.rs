@@ -112,6 +112,14 @@ pub struct ResidualReport {
     pub residual_std_p10_p50_p90_m: [f64; 3],
     /// Fraction of lines whose residual std is under 2 cm.
     pub fraction_under_2cm: f64,
+    /// LIDAR-only mode (no odometry in the bag): occupied 5 cm cells when
+    /// every return is placed with the estimator's trajectory, with no
+    /// motion assumed, and the estimator without deskew (fewer is sharper).
+    pub occupied_cells_lidar_only: usize,
+    /// The same with every scan placed at the first scan's pose.
+    pub occupied_cells_not_moving: usize,
+    /// The same for the estimator without motion deskew.
+    pub occupied_cells_lidar_only_without_deskew: usize,
 }
 
 /// Everything `pcaline eval --real` measures.
@@ -152,7 +160,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
         own_poses,
         drift_grid,
         intel_drift_seed: seed,
-        utm: utm_residuals(&data.join("utm30lx-ros2"), config.detector)?,
+        utm: utm_residuals(&data.join("utm30lx-ros2"), config)?,
     })
 }
 
@@ -477,16 +485,36 @@ fn csail_own(data: &Path, config: &NamedConfig) -> Result<Vec<MovedRow>> {
         .collect()
 }
 
-/// Per-line residual std of the detector `config` on a real log.
-pub fn utm_residuals(log: &Path, config: pcaline::Config) -> Result<ResidualReport> {
-    let mut detector = LineDetector::new(config)?;
+/// Per-line residual std of the detector `config` on a real log without
+/// odometry, and the sharpness of its LIDAR-only trajectory.
+pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport> {
+    let mut detector = LineDetector::new(config.detector)?;
     let (mut residuals, mut points) = (Vec::new(), Vec::new());
+    let estimator = config.aiding_in(AidingMode::Estimator);
+    let (mut deskewed, mut skewed) =
+        (Aiding::new(estimator, config.map)?, Aiding::new(estimator, config.map)?);
+    let mut cells = [0.05; 3].map(pcaline_eval::OccupiedCells::new);
+    let mut first: Option<Pose2> = None;
     let scans = read_log(log, &LogOptions::default(), |record| {
         if let LogRecord::Scan(s) = record {
-            for l in detector.detect(&s.scan).lines {
+            let detection = detector.detect(&s.scan);
+            for l in detection.lines {
                 residuals.push(l.line.residual_std);
                 points.push(l.line.n_points);
             }
+            let plain: Vec<SensorLine> = detection.lines.iter().map(SensorLine::from).collect();
+            let (skew_pose, _) = skewed.step_without_source(s.scan.stamp_s, &plain);
+            let velocity = deskewed.velocity();
+            let lines: Vec<SensorLine> = detector
+                .detect_moving(&s.scan, velocity.as_ref())
+                .lines
+                .iter()
+                .map(SensorLine::from)
+                .collect();
+            let (pose, _) = deskewed.step_without_source(s.scan.stamp_s, &lines);
+            cells[0].add(&s.scan, &pose);
+            cells[1].add(&s.scan, first.get_or_insert(pose));
+            cells[2].add(&s.scan, &skew_pose);
         }
         ControlFlow::Continue(())
     })?;
@@ -501,5 +529,8 @@ pub fn utm_residuals(log: &Path, config: pcaline::Config) -> Result<ResidualRepo
         residual_std_p10_p50_p90_m: [0.1, 0.5, 0.9].map(|q| pick(q).unwrap_or(f64::NAN)),
         fraction_under_2cm: residuals.iter().filter(|r| **r < 0.02).count() as f64
             / residuals.len().max(1) as f64,
+        occupied_cells_lidar_only: cells[0].count(),
+        occupied_cells_not_moving: cells[1].count(),
+        occupied_cells_lidar_only_without_deskew: cells[2].count(),
     })
 }

@@ -78,6 +78,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     let mut poses: Vec<PoseOut> = Vec::new();
     let mut lines: Vec<SensorLine> = Vec::new();
     let mut without_odometry = 0;
+    let mut sharpness = pcaline_eval::OccupiedCells::new(0.05);
     read_log(&args.log, &args.input.options(), |record| {
         let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
         lines.clear();
@@ -98,6 +99,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
                 aiding.step_without_source(stamp, &lines)
             }
         };
+        sharpness.add(&s.scan, &pose);
         poses.push(PoseOut {
             scan: poses.len(),
             stamp_s: s.scan.stamp_s,
@@ -127,10 +129,12 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     )?;
     if !quiet {
         eprintln!(
-            "{}: {} scans, {} map lines{}",
+            "{}: {} scans, {} map lines, {} occupied 5 cm cells (every return placed with the \
+             trajectory; fewer is sharper){}",
             args.log.display(),
             poses.len(),
             aiding.map().len(),
+            sharpness.count(),
             if without_odometry > 0 {
                 format!(
                     ", {without_odometry} scans without odometry (LIDAR-only mode: \

@@ -19,6 +19,7 @@ mod localization;
 mod map_quality;
 mod relation_metric;
 mod reproduce;
+mod sharpness;
 mod trajectory;
 
 pub use detection::{
@@ -35,4 +36,5 @@ pub use reproduce::{
     ETH_EXPERIMENTS, EthExperiment, EthResult, FitRow, FitRowResult, TABLE1, TABLE2, TABLE3,
     dataset, run_eth, run_fit_row,
 };
+pub use sharpness::OccupiedCells;
 pub use trajectory::{TrajectoryErrors, aligned_trajectory_errors, trajectory_errors};
