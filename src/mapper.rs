@@ -71,6 +71,8 @@ pub struct Mapper {
     detector: LineDetector,
     aiding: Aiding,
     lines: Vec<SensorLine>,
+    /// The last stamped source pose (for the deskew velocity).
+    last_source: Option<(f64, Pose2)>,
 }
 
 impl Mapper {
@@ -80,6 +82,7 @@ impl Mapper {
             detector: LineDetector::new(config.detector)?,
             aiding: Aiding::new(config.aiding, config.map)?,
             lines: Vec::new(),
+            last_source: None,
         })
     }
 
@@ -87,7 +90,13 @@ impl Mapper {
     /// it. A stamped scan ([`Scan::stamp_s`]) lets the estimator learn the
     /// source's heading-rate bias, and a stamp going backwards skips it.
     pub fn process(&mut self, scan: &Scan, source_pose: &Pose2) -> MapperStep {
-        self.detect(scan);
+        // Deskew with the source's velocity over the last step, when stamped.
+        let velocity = match (self.last_source, scan.stamp_s) {
+            (Some((t0, p0)), Some(t)) => p0.velocity_to(source_pose, t - t0),
+            _ => None,
+        };
+        self.last_source = scan.stamp_s.map(|t| (t, *source_pose));
+        self.detect(scan, velocity);
         let (pose, report) = match scan.stamp_s {
             Some(t) => self.aiding.step_at(t, source_pose, &self.lines),
             None => self.aiding.step(source_pose, &self.lines),
@@ -99,23 +108,22 @@ impl Mapper {
     /// the last estimated motion is the prediction, the line matches
     /// estimate the motion.
     pub fn process_without_source(&mut self, scan: &Scan) -> MapperStep {
-        self.detect(scan);
+        self.detect(scan, self.aiding.velocity());
         let (pose, report) = self.aiding.step_without_source(scan.stamp_s, &self.lines);
         MapperStep { pose, lines: self.lines.len(), report }
     }
 
     /// Processes one scan with the source's motion since the previous scan.
     pub fn process_increment(&mut self, scan: &Scan, increment: &Pose2) -> MapperStep {
-        self.detect(scan);
+        self.detect(scan, self.aiding.velocity());
         let (pose, report) = self.aiding.step_increment(increment, &self.lines);
         MapperStep { pose, lines: self.lines.len(), report }
     }
 
-    /// Detects the scan's lines, deskewed with the velocity estimated over
-    /// the last step when the scan carries its beam timing.
-    fn detect(&mut self, scan: &Scan) {
+    /// Detects the scan's lines, deskewed with `velocity` when the scan
+    /// carries its beam timing.
+    fn detect(&mut self, scan: &Scan, velocity: Option<Pose2>) {
         self.lines.clear();
-        let velocity = self.aiding.velocity();
         let detection = self.detector.detect_moving(scan, velocity.as_ref());
         self.lines.extend(detection.lines.iter().map(SensorLine::from));
     }

@@ -76,7 +76,7 @@ fn paper_heading_aiding_bounds_a_pure_heading_bias() {
 }
 
 #[test]
-fn full_pose_aiding_bounds_the_position() {
+fn the_default_estimator_bounds_the_position() {
     let scene = maze(); // heading-rate bias, speed scale error, random walks
     let full = run(&scene, 2, MapperConfig::default());
     let heading = run(&scene, 2, heading_aiding());

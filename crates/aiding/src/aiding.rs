@@ -782,4 +782,98 @@ mod tests {
             assert!(pose.is_finite(), "{pose:?}");
         }
     }
+
+    /// The room's walls seen from `world_from_sensor` (sensor frame).
+    fn room_seen_from(world_from_sensor: &Pose2) -> Vec<SensorLine> {
+        let sensor_from_world = world_from_sensor.inverse();
+        room()
+            .iter()
+            .map(|l| SensorLine {
+                line: l.line.transformed(&sensor_from_world),
+                moments: l.moments.transformed(&sensor_from_world),
+            })
+            .collect()
+    }
+
+    fn estimator() -> Aiding {
+        aiding(AidingConfig::estimator())
+    }
+
+    #[test]
+    fn the_estimator_leaves_a_good_source_unchanged() {
+        let mut a = estimator();
+        for k in 0..60 {
+            let source = Pose2::new(0.01 * k as f64, 0.0, 0.001 * k as f64);
+            let (pose, report) = a.step_at(0.1 * k as f64, &source, &room_seen_from(&source));
+            assert!(
+                (pose.x - source.x).abs() < 1e-3
+                    && (pose.y - source.y).abs() < 1e-3
+                    && (pose.heading - source.heading).abs() < 1e-4,
+                "step {k}: {pose:?} vs {source:?} ({report:?})"
+            );
+        }
+        // Confirmed from the third scan on, the walls correct the pose.
+        assert_eq!(a.associations().iter().filter(|m| m.outcome == MatchOutcome::Used).count(), 3);
+    }
+
+    #[test]
+    fn the_estimator_pulls_a_biased_source_back_and_learns_the_bias() {
+        let mut a = estimator();
+        let (mut worst, mut late): (f64, f64) = (0.0, 0.0);
+        for k in 0..200 {
+            let t = 0.1 * k as f64;
+            let truth = Pose2::new(0.005 * k as f64, 0.0, 0.0);
+            // A gyro-like bias of 0.5°/s in the source.
+            let source = Pose2::new(truth.x, truth.y, 0.5f64.to_radians() * t);
+            let (pose, _) = a.step_at(t, &source, &room_seen_from(&truth));
+            let err = (pose.heading - truth.heading).abs();
+            worst = worst.max(err);
+            if k > 100 {
+                late = late.max(err);
+            }
+        }
+        // Unaided, the heading would be 10° off at the end.
+        assert!(worst < 0.2f64.to_radians(), "worst heading error {:.3}°", worst.to_degrees());
+        let bias = a.calibration().heading_rate_bias_rad_s.to_degrees();
+        assert!((bias - 0.5).abs() < 0.1, "bias estimate {bias:.3}°/s");
+        // What is left is the map's own error: its lines absorbed the
+        // observations placed while the bias was being learnt.
+        assert!(
+            late < 0.15f64.to_radians(),
+            "heading error once the bias is learnt {:.3}°",
+            late.to_degrees()
+        );
+    }
+
+    #[test]
+    fn one_wrong_line_cannot_pull_the_pose() {
+        let mut a = estimator();
+        for k in 0..4 {
+            a.step_at(0.1 * k as f64, &Pose2::identity(), &room_seen_from(&Pose2::identity()));
+        }
+        // The source is right; one extra line claims the east wall is 12 cm
+        // nearer (a box face in front of it, say).
+        let mut lines = room_seen_from(&Pose2::identity());
+        lines.push(wall((1.88, -1.0), (1.88, 1.0)));
+        let (pose, report) = a.step_at(0.4, &Pose2::identity(), &lines);
+        assert!(pose.x.abs() < 2e-3 && pose.y.abs() < 2e-3, "{pose:?} {report:?}");
+        assert!(report.matches >= 3, "{report:?}");
+        assert!(report.rejected_joint + report.rejected_gate + report.ambiguous >= 1, "{report:?}");
+    }
+
+    #[test]
+    fn lidar_only_mode_tracks_a_constant_motion() {
+        let mut a = estimator();
+        for k in 0..80 {
+            let truth = Pose2::new(0.01 * k as f64, 0.002 * k as f64, 0.002 * k as f64);
+            let (pose, report) =
+                a.step_without_source(Some(0.025 * k as f64), &room_seen_from(&truth));
+            assert_eq!(report.prediction, crate::Prediction::ConstantVelocity);
+            assert!(
+                (pose.x - truth.x).hypot(pose.y - truth.y) < 0.01
+                    && (pose.heading - truth.heading).abs() < 0.2f64.to_radians(),
+                "scan {k}: {pose:?} vs {truth:?}"
+            );
+        }
+    }
 }

@@ -78,17 +78,24 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     let mut poses: Vec<PoseOut> = Vec::new();
     let mut lines: Vec<SensorLine> = Vec::new();
     let mut without_odometry = 0;
+    let mut last_source: Option<(f64, pcaline::Pose2)> = None;
     let mut sharpness = pcaline_eval::OccupiedCells::new(0.05);
     read_log(&args.log, &args.input.options(), |record| {
         let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
         lines.clear();
-        // Deskewed with the velocity of the last step, when the scan has its
-        // beam timing (ROS time_increment).
-        let velocity = aiding.velocity();
+        // Deskewed with the velocity of the last step (the source's, or the
+        // estimator's without one), when the scan has its beam timing (ROS
+        // time_increment).
+        let source = s.odometry.or(s.pose);
+        let velocity = match (last_source, source, s.scan.stamp_s) {
+            (Some((t0, p0)), Some(p), Some(t)) => p0.velocity_to(&p, t - t0),
+            (_, None, _) => aiding.velocity(),
+            _ => None,
+        };
+        last_source = s.scan.stamp_s.zip(source);
         lines.extend(
             detector.detect_moving(&s.scan, velocity.as_ref()).lines.iter().map(SensorLine::from),
         );
-        let source = s.odometry.or(s.pose);
         let (pose, report) = match (source, s.scan.stamp_s) {
             (Some(p), Some(t)) => aiding.step_at(t, &p, &lines),
             (Some(p), None) => aiding.step(&p, &lines),

@@ -40,6 +40,31 @@ impl VisibleWalls {
     pub fn seen_length_m(&self) -> f64 {
         self.seen.iter().flatten().filter(|s| **s).count() as f64 * self.bin_m
     }
+
+    /// Surfaces of which the sensor saw at least `min_m` metres. A surface
+    /// is a run of consecutive segments of one scene shape that turn by
+    /// less than 15° from one to the next: a straight wall drawn in pieces,
+    /// or a curved wall drawn as chords, is one surface; a corner starts
+    /// another.
+    pub fn surfaces_seen(&self, min_m: f64) -> usize {
+        let mut count = 0;
+        let mut seen_m = 0.0;
+        for (k, (w, bins)) in self.walls.iter().zip(&self.seen).enumerate() {
+            let continues = k > 0 && {
+                let p = &self.walls[k - 1];
+                let (d0, d1) = ((p.b - p.a).normalize(), (w.b - w.a).normalize());
+                p.shape == w.shape
+                    && (p.b - w.a).norm() < 1e-9
+                    && d0.dot(&d1) > 15f64.to_radians().cos()
+            };
+            if !continues {
+                count += usize::from(seen_m >= min_m);
+                seen_m = 0.0;
+            }
+            seen_m += bins.iter().filter(|s| **s).count() as f64 * self.bin_m;
+        }
+        count + usize::from(seen_m >= min_m)
+    }
 }
 
 fn bins(w: &Wall, bin_m: f64) -> usize {

@@ -796,4 +796,99 @@ mod tests {
         assert_eq!(map.insert(&again, &ma).unwrap().0, id);
         assert_eq!(map.len(), 3);
     }
+
+    #[test]
+    fn a_line_is_tentative_until_seen_in_three_scans_and_expires_otherwise() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        let (long, mw) = wall(3.0, 0.0, 2.0);
+        let (legs, ml) = wall(1.0, 5.0, 6.0); // seen once: three chair legs
+        map.begin_scan();
+        let id = map.insert(&long, &mw).unwrap().0;
+        let one_off = map.insert(&legs, &ml).unwrap().0;
+        // Two pieces of the wall in one scan are one sighting.
+        map.insert(&long, &mw);
+        assert_eq!(map.get(id).unwrap().status, LineStatus::Tentative);
+        for _ in 0..2 {
+            map.begin_scan();
+            map.insert(&long, &mw);
+        }
+        assert_eq!(map.get(id).unwrap().status, LineStatus::Confirmed);
+        assert_eq!(map.get(id).unwrap().scans_seen, 3);
+        for _ in 0..10 {
+            map.begin_scan();
+        }
+        assert!(map.get(one_off).is_none(), "the one-off line expired");
+        assert!(map.get(id).is_some(), "a confirmed line never expires");
+        assert_eq!(map.len(), 1);
+        // The index still finds the survivor after the removal.
+        assert_eq!(map.find_match(&long).unwrap().id, id);
+    }
+
+    #[test]
+    fn duplicates_of_one_wall_merge_into_one_line() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        let viewpoint = Point2::new(0.0, 1.0);
+        // Two copies 2 cm apart, made while the first was out of the merge
+        // gate's reach along the wall (more than 0.3 m away)...
+        let (a, ma) = wall(3.0, 0.0, 1.0);
+        let (b, mb) = wall(3.02, 1.5, 2.5);
+        map.insert_seen_from(&a, &ma, Some(&viewpoint));
+        map.insert_seen_from(&b, &mb, Some(&viewpoint));
+        assert_eq!(map.len(), 2);
+        // ...grow together when a sighting bridges the gap: one line remains.
+        let (c, mc) = wall(3.01, 0.5, 2.0);
+        for _ in 0..3 {
+            map.insert_seen_from(&c, &mc, Some(&viewpoint));
+        }
+        assert_eq!(map.len(), 1, "{:?}", map.lines());
+        let l = &map.lines()[0];
+        assert!((l.line.length() - 2.5).abs() < 0.05, "{:?}", l.line);
+        assert_eq!(l.moments.n, 21 * 5);
+    }
+
+    #[test]
+    fn a_curved_surface_is_marked_not_straight() {
+        // The rule with a 3 mm allowance for pose errors (the default's 1 cm
+        // suits real walls seen from estimated poses).
+        let config = MapConfig {
+            lifecycle: Some(crate::Lifecycle {
+                straightness_floor_m: 0.003,
+                ..crate::Lifecycle::standard()
+            }),
+            ..MapConfig::default()
+        };
+        let mut map = LineMap::new(config).unwrap();
+        // Chords of a circle of radius 2 m, each with a 2 mm residual of its
+        // own, seen from viewpoints that slide along it: the merged points
+        // scatter about the merged line by more than a centimetre.
+        let chord = |t0: f64| {
+            let pts: Vec<_> = (0..=20)
+                .map(|i| {
+                    let t = t0 + 0.01 * i as f64;
+                    Point2::new(2.0 * t.cos(), 2.0 * t.sin())
+                })
+                .collect();
+            let m = Moments::from_points(&pts);
+            let mut l = line_from_moments(&m, &pts[0], &pts[20]).unwrap();
+            l.residual_std = 0.001;
+            (l, m)
+        };
+        for k in 0..6 {
+            let (l, m) = chord(-0.1 + 0.04 * k as f64);
+            map.insert(&l, &m);
+        }
+        assert!(
+            map.lines().iter().any(|l| l.status == LineStatus::NotStraight),
+            "{:?}",
+            map.lines()
+        );
+        // A straight wall seen as often stays confirmed.
+        let mut flat = LineMap::new(config).unwrap();
+        for k in 0..6 {
+            let (mut l, m) = wall(3.0, 0.1 * k as f64, 1.0 + 0.1 * k as f64);
+            l.residual_std = 0.002;
+            flat.insert(&l, &m);
+        }
+        assert!(flat.lines().iter().all(|l| l.is_confirmed()), "{:?}", flat.lines());
+    }
 }
