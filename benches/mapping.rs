@@ -1,4 +1,5 @@
-//! Map update and aiding per scan, against maps of 100, 10,000 and 100,000
+//! Map update and aiding per scan (the paper's heading aiding, full-pose
+//! aiding and the estimator), against maps of 100, 10,000 and 100,000
 //! lines. The maze's own lines are in the map; the rest are filler lines at
 //! the maze's density over a growing area, so the bench shows whether the
 //! spatial index keeps the cost independent of the map's size.
@@ -51,7 +52,11 @@ fn with_filler(map: &LineMap, total: usize) -> LineMap {
         let m = Moments::from_points(&pts);
         let line = line_from_moments(&m, &pts[0], &pts[9]).unwrap();
         if map.find_match(&line).is_none() {
-            map.insert(&line, &m);
+            // Seen in three scans: confirmed, so it neither expires nor
+            // is skipped by the estimator.
+            for _ in 0..3 {
+                map.insert(&line, &m);
+            }
         }
     }
     map
@@ -59,18 +64,23 @@ fn with_filler(map: &LineMap, total: usize) -> LineMap {
 
 fn mapping(c: &mut Criterion) {
     let (scans, base) = maze_lines();
+    let (before, before_lines) = scans[149].clone();
     let (pose, lines) = scans[150].clone();
     let mut group = c.benchmark_group("map_update_and_aiding_per_scan");
     for total in [100, 10_000, 100_000] {
         let map = with_filler(&base, total);
-        for (name, config) in
-            [("heading", AidingConfig::heading()), ("full_pose", AidingConfig::full_pose())]
-        {
-            let aiding = Aiding::with_map(config, map.clone()).unwrap();
+        for (name, config) in [
+            ("heading", AidingConfig::heading()),
+            ("full_pose", AidingConfig::full_pose()),
+            ("estimator", AidingConfig::estimator()),
+        ] {
+            // One scan first, so the step has a prior (and a covariance).
+            let mut aiding = Aiding::with_map(config, map.clone()).unwrap();
+            aiding.step_at(0.0, &before, &before_lines);
             group.bench_with_input(BenchmarkId::new(name, total), &aiding, |b, aiding| {
                 b.iter_batched_ref(
                     || aiding.clone(),
-                    |a| black_box(a.step(&pose, &lines)),
+                    |a| black_box(a.step_at(0.025, &pose, &lines)),
                     BatchSize::LargeInput,
                 )
             });
