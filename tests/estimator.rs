@@ -4,30 +4,15 @@
 //! real logs showed (a curved wall, fast turns with motion skew, clutter on
 //! thin legs). Seeded; the heavy grids are `pcaline eval --real --drift-grid`.
 
-#![allow(clippy::print_stderr)] // the loud report of a missing dataset
+mod support;
+use support::data;
 
 use pcaline::aiding::{AidingConfig, Fallback};
 use pcaline::{Mapper, MapperConfig, Pose2};
 use pcaline_eval::{VisibleWalls, aligned_trajectory_errors, map_quality, trajectory_errors};
 use pcaline_io::{CarmenOptions, CarmenReader, LogRecord};
 use pcaline_sim::{OdometryModel, Simulator};
-use std::path::{Path, PathBuf};
-
-fn data(rel: &str) -> Option<PathBuf> {
-    let root = std::env::var_os("PCALINE_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    let path = root.join(rel);
-    if path.exists() {
-        return Some(path);
-    }
-    let msg = format!("MISSING DATASET {} (set PCALINE_DATA)", path.display());
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("{msg}");
-    }
-    eprintln!("\n!!! {msg}: test skipped !!!\n");
-    None
-}
+use std::path::Path;
 
 /// The scans of a CARMEN log with their own (corrected) poses.
 fn carmen(path: &Path) -> Vec<(pcaline::Scan, Pose2)> {

@@ -3,28 +3,12 @@
 //! detector finds centimetre-level lines in the UTM-30LX-EW bag. A missing
 //! dataset fails under `CI=true` and is reported loudly otherwise.
 
-#![allow(clippy::print_stderr)] // the loud report of a missing dataset
+mod support;
+use support::data;
 
 use pcaline::{Config, LineDetector};
 use pcaline_io::{LogOptions, LogRecord, read_log, read_relations};
 use std::ops::ControlFlow;
-use std::path::PathBuf;
-
-fn data(rel: &str) -> Option<PathBuf> {
-    let root = std::env::var_os("PCALINE_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    let path = root.join(rel);
-    if path.exists() {
-        return Some(path);
-    }
-    let msg = format!("MISSING DATASET {} (set PCALINE_DATA)", path.display());
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("{msg}");
-    }
-    eprintln!("\n!!! {msg}: test skipped !!!\n");
-    None
-}
 
 fn count_scans(rel: &str) -> Option<usize> {
     let path = data(rel)?;

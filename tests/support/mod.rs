@@ -1,8 +1,9 @@
 //! Shared helpers for the end-to-end tests: an analytic ray caster for small
-//! hand-made scenes (the full simulator lives in `pcaline-sim`) and bounded
-//! proptest strategies.
+//! hand-made scenes (the full simulator lives in `pcaline-sim`), bounded
+//! proptest strategies, and the real datasets' location.
 
 #![allow(dead_code)]
+#![allow(clippy::print_stderr)] // the loud report of a missing dataset
 
 use pcaline::{Point2, Scan};
 use proptest::prelude::*;
@@ -85,4 +86,24 @@ pub fn any_range() -> impl Strategy<Value = f32> {
         1 => Just(f32::NEG_INFINITY),
         1 => prop::num::f32::ANY,
     ]
+}
+
+/// The real dataset `rel` under `$PCALINE_DATA` (default `../shared/data`).
+/// A missing dataset fails under `CI=true` and is reported loudly, and
+/// skipped, otherwise.
+pub fn data(rel: &str) -> Option<std::path::PathBuf> {
+    let root =
+        std::env::var_os("PCALINE_DATA").map(std::path::PathBuf::from).unwrap_or_else(|| {
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")
+        });
+    let path = root.join(rel);
+    if path.exists() {
+        return Some(path);
+    }
+    let msg = format!("MISSING DATASET {} (set PCALINE_DATA)", path.display());
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("{msg}");
+    }
+    eprintln!("\n!!! {msg}: test skipped !!!\n");
+    None
 }

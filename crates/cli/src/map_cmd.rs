@@ -41,6 +41,15 @@ pub struct MapArgs {
     /// Aiding.
     #[arg(long, value_enum, default_value_t = AidingArg::Estimator)]
     aiding: AidingArg,
+    /// The odometry's translation error per metre travelled (0.05 = 5%), for
+    /// the estimator; overrides the configuration's
+    /// `aiding.estimator.motion.translation_per_m`.
+    #[arg(long, allow_negative_numbers = true)]
+    translation_noise_per_m: Option<f64>,
+    /// The odometry's heading error per metre travelled, degrees (the
+    /// configuration's `aiding.estimator.motion.rotation_per_m`, in radians).
+    #[arg(long, allow_negative_numbers = true)]
+    rotation_noise_deg_per_m: Option<f64>,
     /// Output folder.
     #[arg(long, default_value = "out/map")]
     out: PathBuf,
@@ -72,6 +81,16 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         AidingArg::Full => config.aiding_in(AidingMode::FullPose),
         AidingArg::Estimator => config.aiding_in(AidingMode::Estimator),
     };
+    let mut aiding_config = aiding_config;
+    if let Some(v) = args.translation_noise_per_m {
+        aiding_config.estimator.motion.translation_per_m = v;
+    }
+    if let Some(v) = args.rotation_noise_deg_per_m {
+        aiding_config.estimator.motion.rotation_per_m = v.to_radians();
+    }
+    aiding_config.validate().map_err(|e| {
+        BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
+    })?;
     let mut detector = LineDetector::new(config.detector)?;
     let mut aiding = Aiding::new(aiding_config, config.map)?;
     let bar = progress::spinner("scans", quiet);

@@ -26,11 +26,7 @@ impl ConfigError {
         value: f64,
         requirement: &'static str,
     ) -> Result<(), ConfigError> {
-        if ok && !value.is_nan() {
-            Ok(())
-        } else {
-            Err(ConfigError::OutOfRange { field: field.into(), value, requirement })
-        }
+        Self::check_path(ok, || field.into(), value, requirement)
     }
 
     /// As [`ConfigError::check`], for the field `name` of a section whose
@@ -43,11 +39,20 @@ impl ConfigError {
         value: f64,
         requirement: &'static str,
     ) -> Result<(), ConfigError> {
+        Self::check_path(ok, || format!("{prefix}.{name}").into(), value, requirement)
+    }
+
+    /// The check both share; a NaN value always fails.
+    fn check_path(
+        ok: bool,
+        field: impl FnOnce() -> std::borrow::Cow<'static, str>,
+        value: f64,
+        requirement: &'static str,
+    ) -> Result<(), ConfigError> {
         if ok && !value.is_nan() {
             Ok(())
         } else {
-            let field = format!("{prefix}.{name}").into();
-            Err(ConfigError::OutOfRange { field, value, requirement })
+            Err(ConfigError::OutOfRange { field: field(), value, requirement })
         }
     }
 }
