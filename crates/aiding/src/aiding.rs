@@ -11,9 +11,10 @@ use crate::{
     MotionNoise, gate_distance2, heading_correction, iterated_update, joint_consistent, measure,
     predict, rotate_step, solve_translation, weighted_offset,
 };
+use crate::{PoseWindow, WindowStep};
 use pcaline_fitting::Moments;
 use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Vector2};
-use pcaline_mapping::{LineId, LineMap, LineStatus, MapConfig, MatchGate};
+use pcaline_mapping::{LineId, LineMap, LineStatus, MapConfig, MapLine, MatchGate};
 
 /// A detected line in the sensor frame with the moments of its points.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,6 +89,13 @@ pub struct Aiding {
     /// The predicted step in the world frame (for the calibration).
     step_world: Vector2<f64>,
     associations: Vec<Association>,
+    /// The sliding window ([`crate::EstimatorConfig::window`]).
+    window: Option<PoseWindow>,
+    /// The step being processed: its increment and the increment's
+    /// covariance (for the window).
+    pending_step: Option<(Pose2, Matrix3<f64>)>,
+    /// The last step's consistent matches (for the window).
+    last_consistent: Vec<(LineSegment, MapLine)>,
 }
 
 impl Aiding {
@@ -119,6 +127,9 @@ impl Aiding {
             ),
             step_world: Vector2::zeros(),
             associations: Vec::new(),
+            window: None,
+            pending_step: None,
+            last_consistent: Vec::new(),
         })
     }
 
@@ -249,6 +260,8 @@ impl Aiding {
         };
         let (predicted, mut cov) = predict(&previous, &self.covariance, &motion, &noise);
         cov += self.covariance * velocity_error;
+        self.pending_step =
+            Some((motion, noise.covariance(&motion) + self.covariance * velocity_error));
         self.process(predicted, cov, Prediction::ConstantVelocity, None, lines)
     }
 
@@ -278,6 +291,7 @@ impl Aiding {
             _ => (increment, 0.0, 0.0),
         };
         let (predicted, mut cov) = predict(&previous, &self.covariance, &increment, &noise);
+        self.pending_step = Some((increment, noise.covariance(&increment)));
         // The calibration's own uncertainty over the step.
         self.step_world = Vector2::new(predicted.x - previous.x, predicted.y - previous.y);
         cov[(2, 2)] += var_heading;
@@ -336,7 +350,9 @@ impl Aiding {
     ) -> (Pose2, StepReport) {
         self.map.begin_scan();
         self.associations.clear();
+        self.last_consistent.clear();
         let previous = self.corrected;
+        let previous_cov = self.covariance;
         let (mut pose, mut report, insert) = if self.config.mode == AidingMode::Estimator {
             self.estimate(predicted, predicted_cov, lines)
         } else {
@@ -346,6 +362,11 @@ impl Aiding {
         report.prediction = prediction;
         if fallback.is_some() {
             report.fallback = fallback;
+        }
+        if let (Some(size), AidingMode::Estimator) =
+            (self.config.estimator.window, self.config.mode)
+        {
+            pose = self.smooth(size, previous, previous_cov, pose);
         }
         if !pose.is_finite() {
             pose = predicted;
@@ -524,6 +545,8 @@ impl Aiding {
             return (predicted, report, false);
         }
         report.matches = consistent.len();
+        self.last_consistent =
+            consistent.iter().map(|&(i, j)| (lines[i].line, self.map.lines()[j].clone())).collect();
         report.heading_correction_rad =
             pcaline_geometry::wrap_angle(update.pose.heading - predicted.heading);
         if let Some(c) = e.calibration {
@@ -541,6 +564,53 @@ impl Aiding {
         report.constrained_directions = constrained_directions(&update.covariance, &predicted_cov);
         self.covariance = update.covariance;
         (update.pose, report, true)
+    }
+
+    /// The sliding window's step: the source's increment and the scan's
+    /// consistent matches join the window, which is solved; the newest pose
+    /// replaces the filter's. Without an increment (the first scan, a
+    /// fallback) the window restarts at the filter's pose.
+    fn smooth(
+        &mut self,
+        size: usize,
+        previous: Option<Pose2>,
+        previous_cov: Matrix3<f64>,
+        filtered: Pose2,
+    ) -> Pose2 {
+        let (Some(prev), Some((increment, noise))) = (previous, self.pending_step.take()) else {
+            self.window = Some(PoseWindow::new(filtered, self.covariance, size));
+            return filtered;
+        };
+        let window = self.window.get_or_insert_with(|| PoseWindow::new(prev, previous_cov, size));
+        let e = self.config.estimator;
+        let (r_scale, tentative) = (self.measurement_noise_scale, e.tentative_variance_scale);
+        let matches = std::mem::take(&mut self.last_consistent);
+        let measure = move |pose: &Pose2| -> Vec<LineMeasurement> {
+            matches
+                .iter()
+                .map(|(sensor, map_line)| {
+                    let mut m = measure(sensor, map_line, pose, &e.measurement);
+                    m.covariance *= r_scale;
+                    if map_line.status == LineStatus::Tentative {
+                        m.covariance *= tentative.unwrap_or(1.0);
+                    }
+                    m
+                })
+                .collect()
+        };
+        let oldest = window.oldest_covariance;
+        window.push(
+            WindowStep { increment, noise, measure: std::sync::Arc::new(measure), pose: filtered },
+            oldest,
+        );
+        match window.solve(e.iterations, e.huber_k) {
+            Some((head, next_oldest)) => {
+                window.oldest_covariance = Some(next_oldest);
+                self.covariance = head;
+                window.head()
+            }
+            None => filtered,
+        }
     }
 
     /// The paper's heading aiding and the full-pose variant: each scan's

@@ -33,6 +33,7 @@ mod heading;
 mod line_measurement;
 mod motion_noise;
 mod pose_update;
+mod pose_window;
 mod source_calibration;
 mod translation;
 
@@ -42,6 +43,7 @@ pub use heading::{MIN_D_RHO_M, heading_correction, rotate_step, weighted_offset}
 pub use line_measurement::{LineMeasurement, MeasurementNoise, measure};
 pub use motion_noise::{MotionNoise, predict};
 pub use pose_update::{PoseUpdate, gate_distance2, iterated_update, joint_consistent};
+pub use pose_window::{MeasureAt, PoseWindow, WindowStep};
 pub use source_calibration::{CalibrationConfig, SourceCalibration};
 pub use translation::{NormalConstraint, TranslationFix, solve_translation};
 
@@ -124,6 +126,10 @@ pub struct EstimatorConfig {
     /// Huber's threshold of the update's robust weights, in standard
     /// deviations of a match's own covariance.
     pub huber_k: f64,
+    /// Smooth over a sliding window of this many scans' poses
+    /// ([`PoseWindow`]) instead of the iterated EKF alone; `None` (the
+    /// default): the iterated EKF. Measured in `docs/accuracy.md`.
+    pub window: Option<usize>,
     /// Fewest consistent matches that may correct the pose: a single line
     /// cannot be checked against anything, and one wrong match pulls as
     /// hard as a right one.
@@ -225,6 +231,7 @@ impl EstimatorConfig {
             innovation_chi2: 16.3,
             max_inflation: 100.0,
             iterations: 3,
+            window: None,
             min_matches: 1,
             huber_k: 2.0,
             tentative_variance_scale: Some(4.0),

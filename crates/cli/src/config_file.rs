@@ -206,8 +206,15 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 8] = [
+    const OPTIONAL: [&str; 15] = [
         "map.lifecycle",
+        "aiding.estimator.window",
+        "aiding.estimator.tentative_variance_scale",
+        "aiding.estimator.adaptation",
+        "aiding.estimator.measurement_adaptation",
+        "aiding.estimator.calibration",
+        "aiding.estimator.calibration.heading_rate_bias_std_rad_s",
+        "aiding.estimator.calibration.speed_scale_std",
         "detector.noise_estimation",
         "detector.fitting.residual_test",
         "detector.fitting.orientation_test",
