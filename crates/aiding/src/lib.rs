@@ -151,11 +151,19 @@ pub struct EstimatorConfig {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+#[non_exhaustive]
 pub struct Acceleration {
     /// Linear, metres per second squared.
     pub linear_m_s2: f64,
     /// Angular, radians per second squared.
     pub angular_rad_s2: f64,
+}
+
+impl Acceleration {
+    /// 5 m/s² and 10 rad/s²: a hand-carried or small wheeled sensor.
+    pub const fn hand_held() -> Self {
+        Acceleration { linear_m_s2: 5.0, angular_rad_s2: 10.0 }
+    }
 }
 
 /// Innovation-based adaptation of the motion noise (Mehra 1970; Mohamed
@@ -224,7 +232,7 @@ impl EstimatorConfig {
         EstimatorConfig {
             motion: MotionNoise::wheel_odometry(),
             constant_velocity: MotionNoise::constant_velocity(),
-            max_acceleration: Acceleration { linear_m_s2: 5.0, angular_rad_s2: 10.0 },
+            max_acceleration: Acceleration::hand_held(),
             measurement: MeasurementNoise::standard(),
             gate_chi2: 13.8,
             consensus_chi2: 9.21,
