@@ -75,10 +75,7 @@ pub struct Aiding {
     motion_noise_scale: f64,
     /// The factor on the matches' covariances.
     measurement_noise_scale: f64,
-    /// The time since the previous scan, when both were stamped (consumed
-    /// by the calibration).
-    step_dt_s: Option<f64>,
-    /// The same, kept for the velocity.
+    /// The time since the previous scan, when both were stamped.
     last_dt_s: Option<f64>,
     /// The estimated velocity over the last step, smoothed (for deskew).
     velocity: Option<Pose2>,
@@ -118,7 +115,6 @@ impl Aiding {
             last_motion: None,
             motion_noise_scale: 1.0,
             measurement_noise_scale: 1.0,
-            step_dt_s: None,
             last_dt_s: None,
             velocity: None,
             last_velocity: None,
@@ -177,24 +173,19 @@ impl Aiding {
     /// motion since its previous pose is composed onto the corrected pose;
     /// the first pose is taken as it is.
     pub fn step(&mut self, source_pose: &Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
-        self.step_dt_s = None;
         self.last_dt_s = None;
         self.step_source(source_pose, lines)
     }
 
     /// [`Aiding::step`] with the step's duration already recorded.
     fn step_source(&mut self, source_pose: &Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
-        let dt = self.step_dt_s.take();
         if !source_pose.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
         }
         let increment = self.last_source.map(|s| s.between(source_pose));
         self.last_source = Some(*source_pose);
         match (self.corrected, increment) {
-            (Some(_), Some(inc)) => {
-                self.step_dt_s = dt;
-                self.step_increment(&inc, lines)
-            }
+            (Some(_), Some(inc)) => self.step_increment(&inc, lines),
             _ => self.process(*source_pose, Matrix3::zeros(), Prediction::Source, None, lines),
         }
     }
@@ -279,7 +270,7 @@ impl Aiding {
         let e = &self.config.estimator;
         let jumped = increment.x.hypot(increment.y) > e.max_source_step_m
             || increment.heading.abs() > e.max_source_turn_rad;
-        let dt = self.step_dt_s.take().filter(|dt| *dt > 0.0 && dt.is_finite());
+        let dt = self.step_dt();
         let (increment, noise, prediction, fallback) = if jumped {
             let motion = self.last_motion.unwrap_or_default();
             (motion, e.constant_velocity, Prediction::ConstantVelocity, Some(Fallback::SourceJump))
@@ -301,11 +292,15 @@ impl Aiding {
             let mut t = cov.fixed_view_mut::<2, 2>(0, 0);
             t += u * u.transpose() * var_along;
         }
-        self.step_dt_s = dt;
         if !predicted.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
         }
         self.process(predicted, cov, prediction, fallback, lines)
+    }
+
+    /// The step's duration when both scans were stamped and it is usable.
+    fn step_dt(&self) -> Option<f64> {
+        self.last_dt_s.filter(|dt| *dt > 0.0 && dt.is_finite())
     }
 
     fn stamp_went_backwards(&mut self, stamp_s: f64) -> bool {
@@ -315,8 +310,7 @@ impl Aiding {
         if self.last_stamp_s.is_some_and(|last| stamp_s < last) {
             return true;
         }
-        self.step_dt_s = self.last_stamp_s.map(|last| stamp_s - last);
-        self.last_dt_s = self.step_dt_s;
+        self.last_dt_s = self.last_stamp_s.map(|last| stamp_s - last);
         self.last_stamp_s = Some(stamp_s);
         false
     }
@@ -552,7 +546,7 @@ impl Aiding {
         if let Some(c) = e.calibration {
             self.calibration.observe(
                 &c,
-                self.step_dt_s.take(),
+                self.step_dt(),
                 &self.step_world,
                 (&report.translation_correction_m, report.heading_correction_rad),
                 &predicted_cov,
