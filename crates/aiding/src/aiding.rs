@@ -129,6 +129,30 @@ impl Aiding {
         })
     }
 
+    /// Moves the loop into a corrected world frame, as after a pose-graph
+    /// optimization: the map is replaced by `map` (built in the new frame),
+    /// and the corrected pose and its covariance are carried over by
+    /// `new_world_from_old`. The source's next increment then continues from
+    /// the moved pose. The sliding window, if any, starts again.
+    ///
+    /// Edge cases: before the first scan only the map is replaced; a
+    /// non-finite `new_world_from_old` replaces the map and leaves the pose.
+    pub fn reanchor(&mut self, map: LineMap, new_world_from_old: &Pose2) {
+        self.map = map;
+        self.associations.clear();
+        self.last_consistent.clear();
+        if !new_world_from_old.is_finite() {
+            return;
+        }
+        if let Some(p) = self.corrected {
+            self.corrected = Some(new_world_from_old.compose(&p));
+        }
+        let (s, c) = new_world_from_old.heading.sin_cos();
+        let rotation = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+        self.covariance = rotation * self.covariance * rotation.transpose();
+        self.window = None;
+    }
+
     /// The configuration.
     pub fn config(&self) -> &AidingConfig {
         &self.config

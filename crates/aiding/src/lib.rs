@@ -30,8 +30,11 @@
 
 mod aiding;
 mod heading;
+mod line_alignment;
 mod line_measurement;
+mod loop_closure;
 mod motion_noise;
+mod pose_graph;
 mod pose_update;
 mod pose_window;
 mod source_calibration;
@@ -40,8 +43,17 @@ mod translation;
 pub use aiding::{Aiding, Association, MatchOutcome, SensorLine};
 
 pub use heading::{MIN_D_RHO_M, heading_correction, rotate_step, weighted_offset};
+pub use line_alignment::{
+    Alignment, AlignmentConfig, AlignmentPrior, align_lines, see_through_fraction,
+};
 pub use line_measurement::{LineMeasurement, MeasurementNoise, measure};
+pub use loop_closure::{
+    Keyframe, LoopClosing, LoopClosureConfig, LoopOutcome, LoopRecord, LoopStep, OptimizeSchedule,
+};
 pub use motion_noise::{MotionNoise, predict};
+pub use pose_graph::{
+    EdgeKind, NotOptimized, OptimizeReport, OptimizerConfig, PoseEdge, PoseGraph,
+};
 pub use pose_update::{PoseUpdate, gate_distance2, iterated_update, joint_consistent};
 pub use pose_window::{MeasureAt, PoseWindow, WindowStep};
 pub use source_calibration::{CalibrationConfig, SourceCalibration};

@@ -534,28 +534,32 @@ fn print_detection(rows: &[Row], compare: bool) {
 fn print_real(r: &crate::eval_real::RealReport) {
     println!("configuration: {}", r.config);
     println!(
-        "MIT CSAIL: {} scans with corrected poses; absolute errors after aligning at the first, relation metric between consecutive corrected scans",
+        "MIT CSAIL: {} scans with corrected poses; absolute errors after aligning at the first, and after the least-squares rigid alignment of all (rigid); relation metric between consecutive corrected scans",
         r.csail_pairs
     );
     println!(
-        "{:<32} {:>11} {:>11} {:>9} {:>9} {:>17} {:>17}",
+        "{:<32} {:>11} {:>11} {:>9} {:>9} {:>11} {:>9} {:>17} {:>17}",
         "trajectory",
         "heading rms",
         "heading max",
         "pos rms",
         "pos final",
+        "rigid head.",
+        "rigid pos",
         "rel. trans (m)",
         "rel. rot (deg)"
     );
     for t in &r.csail {
         let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
         println!(
-            "{:<32} {:>9} ° {:>9} ° {:>7} m {:>7} m {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
+            "{:<32} {:>9} ° {:>9} ° {:>7} m {:>7} m {:>9} ° {:>7} m {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
             t.name,
             f(t.heading_rms_deg),
             f(t.heading_max_deg),
             f(t.position_rms_m),
             f(t.position_final_m),
+            f(t.rigid_heading_rms_deg),
+            f(t.rigid_position_rms_m),
             t.relations.translation_mean_m,
             t.relations.translation_std_m,
             t.relations.rotation_mean_deg,

@@ -7,11 +7,13 @@
 
 use crate::config_file::NamedConfig;
 use anyhow::{Context, Result};
-use pcaline::aiding::{Aiding, AidingConfig, AidingMode, SensorLine};
+use pcaline::aiding::{
+    Aiding, AidingConfig, AidingMode, LoopClosing, LoopClosureConfig, SensorLine,
+};
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
     RelationErrors, StampedTrajectory, aligned_trajectory_errors, relation_errors,
-    trajectory_errors,
+    rigidly_aligned_trajectory_errors, trajectory_errors,
 };
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
@@ -38,15 +40,63 @@ pub const INTEL_DRIFT: OdometryModel = OdometryModel {
     position_random_walk_m_sqrt_s: 0.005,
 };
 
-/// The aiding modes compared on real data.
-fn modes(config: &NamedConfig) -> [(&'static str, AidingConfig); 5] {
+/// The aiding modes compared on real data: the aiding, and loop closure on
+/// top of it or not.
+fn modes(config: &NamedConfig) -> [(&'static str, AidingConfig, Option<LoopClosureConfig>); 6] {
+    let estimator = config.aiding_in(AidingMode::Estimator);
     [
-        ("raw", AidingConfig::none()),
-        ("paper-aided (eq. 11-14)", AidingConfig::paper()),
-        ("heading-aided", AidingConfig::heading()),
-        ("full-pose aided", AidingConfig::full_pose()),
-        ("estimator-aided", config.aiding_in(AidingMode::Estimator)),
+        ("raw", AidingConfig::none(), None),
+        ("paper-aided (eq. 11-14)", AidingConfig::paper(), None),
+        ("heading-aided", AidingConfig::heading(), None),
+        ("full-pose aided", AidingConfig::full_pose(), None),
+        ("estimator-aided", estimator, None),
+        ("estimator + loop closure", estimator, Some(LoopClosureConfig::standard())),
     ]
+}
+
+/// One mode's loop: the aiding alone, or with loop closure.
+enum Runner {
+    Plain(Box<Aiding>),
+    Loops(Box<LoopClosing>),
+}
+
+impl Runner {
+    fn new(
+        aiding: AidingConfig,
+        loops: Option<LoopClosureConfig>,
+        config: &NamedConfig,
+    ) -> Result<Self> {
+        Ok(match loops {
+            None => Runner::Plain(Box::new(Aiding::new(aiding, config.map)?)),
+            Some(l) => Runner::Loops(Box::new(LoopClosing::new(aiding, config.map, l)?)),
+        })
+    }
+
+    fn all(config: &NamedConfig) -> Result<Vec<Runner>> {
+        modes(config).iter().map(|(_, a, l)| Runner::new(*a, *l, config)).collect()
+    }
+
+    fn step(&mut self, stamp_s: Option<f64>, source: &Pose2, lines: &[SensorLine]) -> Pose2 {
+        match (self, stamp_s) {
+            (Runner::Plain(a), Some(t)) => a.step_at(t, source, lines).0,
+            (Runner::Plain(a), None) => a.step(source, lines).0,
+            (Runner::Loops(l), Some(t)) => l.step_at(t, source, lines).pose,
+            (Runner::Loops(l), None) => l.step(source, lines).pose,
+        }
+    }
+
+    /// With loop closure: a last optimization, then every stepped scan's
+    /// pose as the graph places it; `None` for the aiding alone (its poses
+    /// are final as they come).
+    fn finish(&mut self) -> Option<Vec<Pose2>> {
+        match self {
+            Runner::Plain(_) => None,
+            Runner::Loops(l) => {
+                l.optimize();
+                Some(l.trajectory().into_iter().map(|p| p.unwrap_or_default()).collect())
+            }
+        }
+    }
 }
 
 /// One trajectory against a reference: absolute errors after aligning at the
@@ -63,6 +113,11 @@ pub struct TrajectoryRow {
     pub position_rms_m: Option<f64>,
     /// Position error of the last pose after alignment, metres.
     pub position_final_m: Option<f64>,
+    /// Heading rms after the least-squares rigid alignment of all poses,
+    /// degrees.
+    pub rigid_heading_rms_deg: Option<f64>,
+    /// Position rms after the least-squares rigid alignment, metres.
+    pub rigid_position_rms_m: Option<f64>,
     /// Relation metric.
     pub relations: RelationRow,
 }
@@ -167,7 +222,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
 /// One detector and one aiding loop per mode, fed scan by scan.
 struct Loops {
     detector: LineDetector,
-    loops: Vec<Aiding>,
+    loops: Vec<Runner>,
     lines: Vec<SensorLine>,
 }
 
@@ -175,10 +230,7 @@ impl Loops {
     fn new(config: &NamedConfig) -> Result<Self> {
         Ok(Loops {
             detector: LineDetector::new(config.detector)?,
-            loops: modes(config)
-                .iter()
-                .map(|(_, a)| Aiding::new(*a, config.map))
-                .collect::<Result<_, _>>()?,
+            loops: Runner::all(config)?,
             lines: Vec::new(),
         })
     }
@@ -188,13 +240,17 @@ impl Loops {
         self.lines.clear();
         self.lines.extend(self.detector.detect(scan).lines.iter().map(SensorLine::from));
         let lines = &self.lines;
-        self.loops
-            .iter_mut()
-            .map(|a| match scan.stamp_s {
-                Some(t) => a.step_at(t, source, lines).0,
-                None => a.step(source, lines).0,
-            })
-            .collect()
+        self.loops.iter_mut().map(|a| a.step(scan.stamp_s, source, lines)).collect()
+    }
+
+    /// Replaces the poses of the loop-closing modes by their optimized
+    /// trajectories (every scan was stepped).
+    fn finish(&mut self, poses: &mut [Vec<Pose2>]) {
+        for (runner, out) in self.loops.iter_mut().zip(poses) {
+            if let Some(final_poses) = runner.finish() {
+                *out = final_poses;
+            }
+        }
     }
 }
 
@@ -211,6 +267,7 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>
             out.push(pose);
         }
     }
+    loops.finish(&mut poses);
     // Relations between consecutive corrected scans, stamped by pair index.
     let reference: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
     let relations: Vec<Relation> = (1..reference.len())
@@ -221,7 +278,7 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>
         })
         .collect();
     let mut rows = Vec::new();
-    for ((name, _), est) in modes(config).iter().zip(&poses) {
+    for ((name, _, _), est) in modes(config).iter().zip(&poses) {
         let picked: Vec<Pose2> = pairs
             .iter()
             .map(|p| {
@@ -229,6 +286,7 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>
             })
             .collect::<Result<_>>()?;
         let e = aligned_trajectory_errors(&picked, &reference).context("no pairs")?;
+        let rigid = rigidly_aligned_trajectory_errors(&picked, &reference).context("no pairs")?;
         let stamped = StampedTrajectory::new(
             picked.iter().enumerate().map(|(k, p)| (k as f64, *p)).collect(),
         );
@@ -239,6 +297,8 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>
             heading_max_deg: Some(e.heading_max_rad.to_degrees()),
             position_rms_m: Some(e.position_rms_m),
             position_final_m: Some(e.position_final_m),
+            rigid_heading_rms_deg: Some(rigid.heading_rms_rad.to_degrees()),
+            rigid_position_rms_m: Some(rigid.position_rms_m),
             relations: r.into(),
         });
     }
@@ -321,26 +381,43 @@ fn intel_run(
     source: &[Pose2],
     config: &NamedConfig,
 ) -> Result<Vec<Vec<Pose2>>> {
-    let mut loops: Vec<Aiding> =
-        modes(config).iter().map(|(_, a)| Aiding::new(*a, config.map)).collect::<Result<_, _>>()?;
+    let mut loops = Runner::all(config)?;
     let mut out: Vec<Vec<Pose2>> = vec![Vec::with_capacity(records.len()); loops.len()];
     let mut at_last_scan: Option<(Pose2, Vec<Pose2>)> = None;
+    // Each record's last scan (counted) and the source's motion since it.
+    let mut since_scan: Vec<Option<(usize, Pose2)>> = Vec::with_capacity(records.len());
+    let mut scans = 0;
     for (record, source) in records.iter().zip(source) {
         let poses: Vec<Pose2> = match (&record.lines, &at_last_scan) {
             (Some(lines), _) => {
                 let poses: Vec<Pose2> =
-                    loops.iter_mut().map(|a| a.step_at(record.time_s, source, lines).0).collect();
+                    loops.iter_mut().map(|a| a.step(Some(record.time_s), source, lines)).collect();
                 at_last_scan = Some((*source, poses.clone()));
+                since_scan.push(Some((scans, Pose2::default())));
+                scans += 1;
                 poses
             }
             (None, Some((source_then, poses))) => {
                 let motion = source_then.between(source);
+                since_scan.push(Some((scans - 1, motion)));
                 poses.iter().map(|p| p.compose(&motion)).collect()
             }
-            (None, None) => vec![*source; loops.len()],
+            (None, None) => {
+                since_scan.push(None);
+                vec![*source; loops.len()]
+            }
         };
         for (o, pose) in out.iter_mut().zip(poses) {
             o.push(pose);
+        }
+    }
+    for (runner, o) in loops.iter_mut().zip(&mut out) {
+        if let Some(at_scans) = runner.finish() {
+            for (pose, since) in o.iter_mut().zip(&since_scan) {
+                if let Some((k, motion)) = since {
+                    *pose = at_scans[*k].compose(motion);
+                }
+            }
         }
     }
     Ok(out)
@@ -394,6 +471,8 @@ fn intel(
         heading_max_deg: None,
         position_rms_m: None,
         position_final_m: None,
+        rigid_heading_rms_deg: None,
+        rigid_position_rms_m: None,
         relations,
     };
     let mut rows = vec![row(
@@ -401,7 +480,8 @@ fn intel(
         intel_score(&records, &relations, &corrected)?,
     )];
     let mut moved = Vec::new();
-    for ((name, _), poses) in modes(config).iter().zip(intel_run(&records, &corrected, config)?) {
+    for ((name, _, _), poses) in modes(config).iter().zip(intel_run(&records, &corrected, config)?)
+    {
         let e = trajectory_errors(&poses, &corrected).context("no poses")?;
         moved.push(MovedRow {
             log: "intel.gfs.log".into(),
@@ -413,7 +493,7 @@ fn intel(
         });
     }
     let drifted = INTEL_DRIFT.corrupt_stamped(&corrected, &times, seed);
-    for ((name, _), poses) in modes(config).iter().zip(intel_run(&records, &drifted, config)?) {
+    for ((name, _, _), poses) in modes(config).iter().zip(intel_run(&records, &drifted, config)?) {
         rows.push(row(format!("drifted, {name}"), intel_score(&records, &relations, &poses)?));
     }
     let mut cells = Vec::new();
@@ -422,7 +502,7 @@ fn intel(
             for s in DRIFT_GRID_SEEDS {
                 let model = drift_model(bias, s);
                 let drifted = model.corrupt_stamped(&corrected, &times, s);
-                for ((name, _), poses) in
+                for ((name, _, _), poses) in
                     modes(config).iter().zip(intel_run(&records, &drifted, config)?)
                 {
                     // At the scans, aligned at the first scan: the drift
@@ -468,10 +548,11 @@ fn csail_own(data: &Path, config: &NamedConfig) -> Result<Vec<MovedRow>> {
             out.push(p);
         }
     }
+    loops.finish(&mut poses);
     modes(config)
         .iter()
         .zip(&poses)
-        .map(|((name, _), p)| {
+        .map(|((name, _, _), p)| {
             let e = trajectory_errors(p, &source).context("no scans in csail.corrected.log")?;
             Ok(MovedRow {
                 log: "csail.corrected.log".into(),

@@ -9,7 +9,9 @@ use crate::svg::Plot;
 use anyhow::Result;
 use clap::ValueEnum;
 use pcaline::LineDetector;
-use pcaline::aiding::{Aiding, AidingMode, SensorLine};
+use pcaline::aiding::{
+    Aiding, AidingMode, EdgeKind, LoopClosing, LoopClosureConfig, LoopOutcome, SensorLine,
+};
 use pcaline_io::{LogRecord, read_log, write_json, write_map_csv, write_map_json};
 use serde::Serialize;
 use std::ops::ControlFlow;
@@ -50,6 +52,11 @@ pub struct MapArgs {
     /// configuration's `aiding.estimator.motion.rotation_per_m`, in radians).
     #[arg(long, allow_negative_numbers = true)]
     rotation_noise_deg_per_m: Option<f64>,
+    /// Do not close loops: keep the estimator's trajectory and map as they
+    /// come (by default, keyframes, loop closure from lines and a pose graph
+    /// undo the drift when the log returns to a mapped place).
+    #[arg(long)]
+    no_loop_closure: bool,
     /// Output folder.
     #[arg(long, default_value = "out/map")]
     out: PathBuf,
@@ -92,7 +99,15 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
     let mut detector = LineDetector::new(config.detector)?;
-    let mut aiding = Aiding::new(aiding_config, config.map)?;
+    let mut aiding = if args.no_loop_closure {
+        Runner::Plain(Box::new(Aiding::new(aiding_config, config.map)?))
+    } else {
+        Runner::Loops(Box::new(LoopClosing::new(
+            aiding_config,
+            config.map,
+            LoopClosureConfig::standard(),
+        )?))
+    };
     let bar = progress::spinner("scans", quiet);
     let mut poses: Vec<PoseOut> = Vec::new();
     let mut lines: Vec<SensorLine> = Vec::new();
@@ -140,6 +155,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     if poses.is_empty() {
         return Err(BadInput(format!("{}: no scans", args.log.display())).into());
     }
+    let graph = aiding.finish(&mut poses);
     std::fs::create_dir_all(&args.out)?;
     let map_path = args.out.join("map.json");
     write_map_json(&map_path, aiding.map())?;
@@ -147,20 +163,39 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     write_map_csv(&map_csv, aiding.map())?;
     let traj_path = args.out.join("trajectory.json");
     write_json(&traj_path, &poses)?;
+    let graph_path = match &graph {
+        Some(g) => {
+            let path = args.out.join("graph.json");
+            write_json(&path, g)?;
+            Some(path)
+        }
+        None => None,
+    };
     let pictures = write_svg_and_png(
         &args.out,
         "map",
-        &draw(&aiding, &poses, &args.log.display().to_string()),
+        &draw(aiding.map(), &poses, graph.as_ref(), &args.log.display().to_string()),
         args.png,
     )?;
     if !quiet {
         eprintln!(
             "{}: {} scans, {} map lines, {} occupied 5 cm cells (every return placed with the \
-             trajectory; fewer is sharper){}",
+             online trajectory; fewer is sharper){}{}",
             args.log.display(),
             poses.len(),
             aiding.map().len(),
             sharpness.count(),
+            graph.as_ref().map_or(String::new(), |g| format!(
+                ", {} keyframes, {} loops accepted ({} switched off by the optimizer, {} \
+                 candidates refused by the consistency test)",
+                g.nodes.len(),
+                g.loops.iter().filter(|l| l.outcome == "accepted").count(),
+                g.loops.iter().filter(|l| l.outcome == "switched_off").count(),
+                g.loops
+                    .iter()
+                    .filter(|l| l.outcome != "accepted" && l.outcome != "switched_off")
+                    .count(),
+            )),
             if without_odometry > 0 {
                 format!(
                     ", {without_odometry} scans without odometry (LIDAR-only mode: \
@@ -172,13 +207,221 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         );
     }
     println!("{}\n{}\n{}", map_path.display(), map_csv.display(), traj_path.display());
+    if let Some(p) = graph_path {
+        println!("{}", p.display());
+    }
     for p in pictures {
         println!("{}", p.display());
     }
     Ok(())
 }
 
-fn draw(aiding: &Aiding, poses: &[PoseOut], name: &str) -> String {
+/// The estimator alone, or with loop closure.
+enum Runner {
+    Plain(Box<Aiding>),
+    Loops(Box<LoopClosing>),
+}
+
+impl Runner {
+    fn aiding(&self) -> &Aiding {
+        match self {
+            Runner::Plain(a) => a,
+            Runner::Loops(l) => l.aiding(),
+        }
+    }
+
+    fn velocity(&self) -> Option<pcaline::Pose2> {
+        self.aiding().velocity()
+    }
+
+    fn map(&self) -> &pcaline::mapping::LineMap {
+        self.aiding().map()
+    }
+
+    fn step_at(
+        &mut self,
+        t: f64,
+        p: &pcaline::Pose2,
+        lines: &[SensorLine],
+    ) -> (pcaline::Pose2, pcaline::aiding::StepReport) {
+        match self {
+            Runner::Plain(a) => a.step_at(t, p, lines),
+            Runner::Loops(l) => {
+                let s = l.step_at(t, p, lines);
+                (s.pose, s.report)
+            }
+        }
+    }
+
+    fn step(
+        &mut self,
+        p: &pcaline::Pose2,
+        lines: &[SensorLine],
+    ) -> (pcaline::Pose2, pcaline::aiding::StepReport) {
+        match self {
+            Runner::Plain(a) => a.step(p, lines),
+            Runner::Loops(l) => {
+                let s = l.step(p, lines);
+                (s.pose, s.report)
+            }
+        }
+    }
+
+    fn step_without_source(
+        &mut self,
+        stamp: Option<f64>,
+        lines: &[SensorLine],
+    ) -> (pcaline::Pose2, pcaline::aiding::StepReport) {
+        match self {
+            Runner::Plain(a) => a.step_without_source(stamp, lines),
+            Runner::Loops(l) => {
+                let s = l.step_without_source(stamp, lines);
+                (s.pose, s.report)
+            }
+        }
+    }
+
+    /// With loop closure: a last optimization, the trajectory replaced by
+    /// the optimized one, and the graph to write.
+    fn finish(&mut self, poses: &mut [PoseOut]) -> Option<GraphOut> {
+        let Runner::Loops(l) = self else { return None };
+        let report = l.optimize();
+        for (out, p) in poses.iter_mut().zip(l.trajectory()) {
+            if let Some(p) = p {
+                out.aided = [p.x, p.y, p.heading];
+            }
+        }
+        let g = l.graph();
+        Some(GraphOut {
+            nodes: g
+                .nodes
+                .iter()
+                .zip(l.keyframes())
+                .map(|(n, k)| NodeOut {
+                    scan: k.scan,
+                    stamp_s: k.stamp_s,
+                    pose: [n.x, n.y, n.heading],
+                })
+                .collect(),
+            edges: g
+                .edges
+                .iter()
+                .map(|e| EdgeOut {
+                    from: e.from,
+                    to: e.to,
+                    kind: match e.kind {
+                        EdgeKind::Loop => "loop",
+                        _ => "sequential",
+                    },
+                    active: e.active,
+                    from_from_to: [e.from_from_to.x, e.from_from_to.y, e.from_from_to.heading],
+                    covariance: [
+                        e.covariance
+                            .row(0)
+                            .iter()
+                            .copied()
+                            .collect::<Vec<_>>()
+                            .try_into()
+                            .unwrap_or_default(),
+                        e.covariance
+                            .row(1)
+                            .iter()
+                            .copied()
+                            .collect::<Vec<_>>()
+                            .try_into()
+                            .unwrap_or_default(),
+                        e.covariance
+                            .row(2)
+                            .iter()
+                            .copied()
+                            .collect::<Vec<_>>()
+                            .try_into()
+                            .unwrap_or_default(),
+                    ],
+                })
+                .collect(),
+            loops: l
+                .loops()
+                .iter()
+                .map(|r| LoopOut {
+                    keyframe: r.keyframe,
+                    candidate: r.candidate,
+                    edge: r.edge,
+                    outcome: match r.outcome {
+                        LoopOutcome::Accepted => "accepted",
+                        LoopOutcome::SwitchedOff => "switched_off",
+                        LoopOutcome::TooLittleMatched => "too_little_matched",
+                        LoopOutcome::Unconstrained => "unconstrained",
+                        LoopOutcome::LargeResidual => "large_residual",
+                        LoopOutcome::SeesThroughWalls => "sees_through_walls",
+                        _ => "other",
+                    },
+                    candidate_from_current: [
+                        r.candidate_from_current.x,
+                        r.candidate_from_current.y,
+                        r.candidate_from_current.heading,
+                    ],
+                    matched_length_m: r.matched_length_m,
+                    weakest_direction_m: r.weakest_direction_m,
+                    rms_m: r.rms_m,
+                    see_through: r.see_through,
+                })
+                .collect(),
+            optimizations: l.optimizations(),
+            last_optimization_kept: report.kept.map(|k| format!("{k:?}")),
+        })
+    }
+}
+
+/// `graph.json`: the pose graph after the last optimization.
+#[derive(Debug, Serialize)]
+struct GraphOut {
+    /// One per keyframe: its scan, stamp and optimized pose (x, y, heading).
+    nodes: Vec<NodeOut>,
+    edges: Vec<EdgeOut>,
+    /// Every aligned loop candidate, accepted or not, and why.
+    loops: Vec<LoopOut>,
+    optimizations: usize,
+    /// Why the last optimization kept the poses, if it did.
+    last_optimization_kept: Option<String>,
+}
+
+#[derive(Debug, Serialize)]
+struct NodeOut {
+    scan: usize,
+    stamp_s: Option<f64>,
+    pose: [f64; 3],
+}
+
+#[derive(Debug, Serialize)]
+struct EdgeOut {
+    from: usize,
+    to: usize,
+    kind: &'static str,
+    active: bool,
+    from_from_to: [f64; 3],
+    covariance: [[f64; 3]; 3],
+}
+
+#[derive(Debug, Serialize)]
+struct LoopOut {
+    keyframe: usize,
+    candidate: usize,
+    edge: Option<usize>,
+    outcome: &'static str,
+    candidate_from_current: [f64; 3],
+    matched_length_m: f64,
+    weakest_direction_m: f64,
+    rms_m: f64,
+    see_through: f64,
+}
+
+fn draw(
+    map: &pcaline::mapping::LineMap,
+    poses: &[PoseOut],
+    graph: Option<&GraphOut>,
+    name: &str,
+) -> String {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     let mut grow = |p: [f64; 2]| {
         if p[0].is_finite() && p[1].is_finite() {
@@ -186,7 +429,7 @@ fn draw(aiding: &Aiding, poses: &[PoseOut], name: &str) -> String {
             hi = [hi[0].max(p[0]), hi[1].max(p[1])];
         }
     };
-    for m in aiding.map().lines() {
+    for m in map.lines() {
         grow([m.line.start.x, m.line.start.y]);
         grow([m.line.end.x, m.line.end.y]);
     }
@@ -197,7 +440,7 @@ fn draw(aiding: &Aiding, poses: &[PoseOut], name: &str) -> String {
         }
     }
     let mut plot = Plot::new(lo, hi, 1000.0);
-    for m in aiding.map().lines() {
+    for m in map.lines() {
         let l = &m.line;
         plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 1.5);
     }
@@ -209,5 +452,13 @@ fn draw(aiding: &Aiding, poses: &[PoseOut], name: &str) -> String {
     plot.legend("line map", "#d62728", false);
     plot.legend("log odometry", "#1f77b4", false);
     plot.legend("aided trajectory", "#9467bd", false);
+    if let Some(g) = graph {
+        for e in g.edges.iter().filter(|e| e.kind == "loop") {
+            let (a, b) = (g.nodes[e.from].pose, g.nodes[e.to].pose);
+            let colour = if e.active { "#2ca02c" } else { "#7f7f7f" };
+            plot.line([a[0], a[1]], [b[0], b[1]], colour, 2.0);
+        }
+        plot.legend("loop closure (grey: switched off)", "#2ca02c", false);
+    }
     plot.finish(&format!("{name}: line map and trajectory"))
 }

@@ -37,4 +37,7 @@ pub use reproduce::{
     dataset, run_eth, run_fit_row,
 };
 pub use sharpness::OccupiedCells;
-pub use trajectory::{TrajectoryErrors, aligned_trajectory_errors, trajectory_errors};
+pub use trajectory::{
+    TrajectoryErrors, aligned_trajectory_errors, rigidly_aligned_trajectory_errors,
+    trajectory_errors,
+};

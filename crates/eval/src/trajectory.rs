@@ -52,3 +52,63 @@ pub fn aligned_trajectory_errors(
     let aligned: Vec<Pose2> = estimate.iter().map(|p| reference_from_estimate.compose(p)).collect();
     trajectory_errors(&aligned, reference)
 }
+/// Errors of `estimate` against `reference` after the least-squares rigid
+/// alignment of all positions (rotation and translation, no scale; Horn's
+/// closed form in 2D): how well the trajectory's shape agrees, whatever its
+/// start. Pairs with a non-finite pose are left out of the alignment and
+/// count as infinite errors. `None` when no finite pair is left.
+pub fn rigidly_aligned_trajectory_errors(
+    estimate: &[Pose2],
+    reference: &[Pose2],
+) -> Option<TrajectoryErrors> {
+    let pairs: Vec<(&Pose2, &Pose2)> =
+        estimate.iter().zip(reference).filter(|(e, r)| e.is_finite() && r.is_finite()).collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let n = pairs.len() as f64;
+    let (mut ex, mut ey, mut rx, mut ry) = (0.0, 0.0, 0.0, 0.0);
+    for (e, r) in &pairs {
+        ex += e.x / n;
+        ey += e.y / n;
+        rx += r.x / n;
+        ry += r.y / n;
+    }
+    let (mut cross, mut dot) = (0.0, 0.0);
+    for (e, r) in &pairs {
+        let (px, py, qx, qy) = (e.x - ex, e.y - ey, r.x - rx, r.y - ry);
+        cross += px * qy - py * qx;
+        dot += px * qx + py * qy;
+    }
+    let theta = if cross == 0.0 && dot == 0.0 {
+        // All positions coincide: align the mean heading instead.
+        let (s, c) = pairs.iter().fold((0.0, 0.0), |(s, c), (e, r)| {
+            let d = wrap_angle(r.heading - e.heading);
+            (s + d.sin(), c + d.cos())
+        });
+        s.atan2(c)
+    } else {
+        cross.atan2(dot)
+    };
+    let rotation = Pose2::new(0.0, 0.0, theta);
+    let moved = rotation.transform_point(&pcaline_geometry::Point2::new(ex, ey));
+    let reference_from_estimate = Pose2::new(rx - moved.x, ry - moved.y, theta);
+    let aligned: Vec<Pose2> = estimate.iter().map(|p| reference_from_estimate.compose(p)).collect();
+    trajectory_errors(&aligned, reference)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rigid_alignment_removes_any_rigid_motion() {
+        let reference: Vec<Pose2> =
+            (0..20).map(|k| Pose2::new(k as f64, (k as f64 * 0.3).sin(), 0.1 * k as f64)).collect();
+        let motion = Pose2::new(3.0, -7.0, 2.0);
+        let estimate: Vec<Pose2> = reference.iter().map(|p| motion.compose(p)).collect();
+        let e = rigidly_aligned_trajectory_errors(&estimate, &reference).unwrap();
+        assert!(e.position_rms_m < 1e-9 && e.heading_rms_rad < 1e-9, "{e:?}");
+        assert!(rigidly_aligned_trajectory_errors(&[], &reference).is_none());
+    }
+}

@@ -1,0 +1,772 @@
+//! [`LoopClosing`]: the estimator ([`Aiding`]) with keyframes, loop closure
+//! from lines alone and a pose graph, so that drift accumulated away from a
+//! mapped area is undone when the vehicle comes back.
+//!
+//! Scan by scan, the estimator corrects the source's pose against the line
+//! map. Every [`LoopClosureConfig::keyframe_distance_m`] of travel (or
+//! [`LoopClosureConfig::keyframe_turn_rad`] of turn) the scan becomes a
+//! keyframe: its lines are kept in its own frame, and a sequential edge with
+//! the motion model's covariance joins it to the previous keyframe. A new
+//! keyframe looks for loops:
+//!
+//! 1. **Candidates**: older keyframes at least
+//!    [`LoopClosureConfig::min_loop_path_m`] of travel back, within a search
+//!    radius that grows with the travel between them (the relative pose's
+//!    uncertainty, bounded by [`LoopClosureConfig::max_search_radius_m`]).
+//! 2. **Verification**: the lines of the last keyframes, in the current
+//!    keyframe's frame, are aligned to the lines around the candidate
+//!    ([`align_lines`]: RANSAC over line pairs, then least squares), and the
+//!    alignment must pass a consistency test: enough wall matched, in two
+//!    directions, with a small residual.
+//! 3. **Optimization** ([`PoseGraph::optimize`]): loop edges carry a Cauchy
+//!    kernel and are switched off when the optimum disagrees with them, so a
+//!    false loop does not survive. The map is then rebuilt from the keyframes
+//!    at their optimized poses (re-anchored) and the estimator carried over.
+//!
+//! The optimization runs after each accepted loop by default
+//! ([`OptimizeSchedule::AfterLoop`]); with [`OptimizeSchedule::Manual`] the
+//! caller schedules [`LoopClosing::optimize`] itself (for example on another
+//! thread's budget).
+
+use crate::{
+    Aiding, AidingConfig, Alignment, AlignmentConfig, AlignmentPrior, EdgeKind, OptimizeReport,
+    OptimizerConfig, PoseGraph, SensorLine, StepReport, align_lines, see_through_fraction,
+};
+
+/// A sample closer than this to a crossing wall is not seeing through it
+/// (the wall it lies on, seen again with noise), metres.
+const SEE_THROUGH_MARGIN_M: f64 = 0.15;
+use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Vector3, wrap_angle};
+use pcaline_mapping::{LineMap, MapConfig};
+
+/// When [`LoopClosing`] optimizes its graph.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[non_exhaustive]
+pub enum OptimizeSchedule {
+    /// Right after a scan that added a loop edge.
+    AfterLoop,
+    /// Only when the caller calls [`LoopClosing::optimize`].
+    Manual,
+}
+
+/// Configuration of [`LoopClosing`]. Errors name fields under
+/// `loop_closure.`, as a configuration file writes them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+#[non_exhaustive]
+pub struct LoopClosureConfig {
+    /// A scan becomes a keyframe after this much travel since the last one,
+    /// metres ...
+    pub keyframe_distance_m: f64,
+    /// ... or this much turn, radians.
+    pub keyframe_turn_rad: f64,
+    /// Keyframes on each side whose lines form the local line set of a
+    /// keyframe (the current keyframe uses this many before it).
+    pub submap_keyframes: usize,
+    /// A candidate lies at least this much travel back, metres.
+    pub min_loop_path_m: f64,
+    /// Search radius around the predicted relative pose: this, metres ...
+    pub search_radius_m: f64,
+    /// ... plus this per metre travelled between the two keyframes ...
+    pub search_radius_per_m: f64,
+    /// ... at most this, metres.
+    pub max_search_radius_m: f64,
+    /// Rotation search: this, radians ...
+    pub search_rotation_rad: f64,
+    /// ... plus this per metre travelled, radians per metre (at most pi).
+    pub search_rotation_per_m: f64,
+    /// Candidates verified per keyframe, nearest first.
+    pub max_candidates: usize,
+    /// After an accepted loop, this many keyframes look for none.
+    pub loop_spacing_keyframes: usize,
+    /// Consistency test: matched wall length at least this, metres ...
+    pub min_matched_length_m: f64,
+    /// ... and at least this fraction of the current lines' length ...
+    pub min_matched_fraction: f64,
+    /// ... with at least this much wall constraining the weakest direction,
+    /// metres ...
+    pub min_weakest_direction_m: f64,
+    /// ... and an rms endpoint residual of at most this, metres ...
+    pub max_rms_m: f64,
+    /// ... and neither keyframe's local lines may see through the other's
+    /// walls over more than this fraction of their length
+    /// ([`see_through_fraction`](crate::see_through_fraction)).
+    pub max_see_through: f64,
+    /// Floors of a loop edge's standard deviations: position, metres ...
+    pub loop_floor_m: f64,
+    /// ... and heading, radians.
+    pub loop_floor_rad: f64,
+    /// The line-set alignment.
+    pub alignment: AlignmentConfig,
+    /// The graph optimizer.
+    pub optimizer: OptimizerConfig,
+    /// When to optimize.
+    pub schedule: OptimizeSchedule,
+}
+
+impl LoopClosureConfig {
+    /// Defaults for indoor logs: a keyframe each 0.5 m or 15°, local sets of
+    /// 5 keyframes, loops at least 8 m of travel back within 1 m + 10% of
+    /// the travel (at most 8 m) and 20° + 1°/m, a consistency test of 3 m of
+    /// wall, 40% of the current lines, 1 m in the weakest direction and 4 cm
+    /// rms; loop edges no tighter than 5 cm and 0.5°.
+    pub fn standard() -> Self {
+        LoopClosureConfig {
+            keyframe_distance_m: 0.5,
+            keyframe_turn_rad: 15f64.to_radians(),
+            submap_keyframes: 5,
+            min_loop_path_m: 8.0,
+            search_radius_m: 1.0,
+            search_radius_per_m: 0.1,
+            max_search_radius_m: 8.0,
+            search_rotation_rad: 20f64.to_radians(),
+            search_rotation_per_m: 1f64.to_radians(),
+            max_candidates: 4,
+            loop_spacing_keyframes: 5,
+            min_matched_length_m: 3.0,
+            min_matched_fraction: 0.4,
+            min_weakest_direction_m: 1.0,
+            max_rms_m: 0.04,
+            max_see_through: 0.5,
+            loop_floor_m: 0.05,
+            loop_floor_rad: 0.5f64.to_radians(),
+            alignment: AlignmentConfig::standard(),
+            optimizer: OptimizerConfig::standard(),
+            schedule: OptimizeSchedule::AfterLoop,
+        }
+    }
+
+    /// Checks every value; errors name `loop_closure.<field>`.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        const P: &str = "loop_closure";
+        for (name, v) in [
+            ("keyframe_distance_m", self.keyframe_distance_m),
+            ("keyframe_turn_rad", self.keyframe_turn_rad),
+            ("min_loop_path_m", self.min_loop_path_m),
+            ("search_radius_m", self.search_radius_m),
+            ("max_search_radius_m", self.max_search_radius_m),
+            ("search_rotation_rad", self.search_rotation_rad),
+            ("min_matched_length_m", self.min_matched_length_m),
+            ("min_weakest_direction_m", self.min_weakest_direction_m),
+            ("max_rms_m", self.max_rms_m),
+            ("loop_floor_m", self.loop_floor_m),
+            ("loop_floor_rad", self.loop_floor_rad),
+        ] {
+            ConfigError::check_field(
+                v > 0.0 && v.is_finite(),
+                P,
+                name,
+                v,
+                "must be finite and > 0",
+            )?;
+        }
+        for (name, v) in [
+            ("search_radius_per_m", self.search_radius_per_m),
+            ("search_rotation_per_m", self.search_rotation_per_m),
+        ] {
+            ConfigError::check_field(
+                v >= 0.0 && v.is_finite(),
+                P,
+                name,
+                v,
+                "must be finite and >= 0",
+            )?;
+        }
+        ConfigError::check_field(
+            (0.0..=1.0).contains(&self.max_see_through),
+            P,
+            "max_see_through",
+            self.max_see_through,
+            "must be in [0, 1]",
+        )?;
+        ConfigError::check_field(
+            self.min_matched_fraction > 0.0 && self.min_matched_fraction <= 1.0,
+            P,
+            "min_matched_fraction",
+            self.min_matched_fraction,
+            "must be in (0, 1]",
+        )?;
+        for (name, v, max) in [
+            ("submap_keyframes", self.submap_keyframes, 100),
+            ("max_candidates", self.max_candidates, 100),
+            ("loop_spacing_keyframes", self.loop_spacing_keyframes, 10_000),
+        ] {
+            ConfigError::check_field(v <= max, P, name, v as f64, "is too large")?;
+        }
+        ConfigError::check_field(
+            self.max_candidates >= 1,
+            P,
+            "max_candidates",
+            0.0,
+            "must be >= 1",
+        )?;
+        self.alignment.validate("loop_closure.alignment")?;
+        self.optimizer.validate("loop_closure.optimizer")
+    }
+}
+
+impl Default for LoopClosureConfig {
+    fn default() -> Self {
+        Self::standard()
+    }
+}
+
+/// A keyframe: a scan whose lines the graph keeps, in its own frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Keyframe {
+    /// Index of the scan (counted from 0 by [`LoopClosing`]).
+    pub scan: usize,
+    /// The scan's stamp, if it had one.
+    pub stamp_s: Option<f64>,
+    /// Travel from the first keyframe along the estimated path, metres.
+    pub path_m: f64,
+    /// The scan's lines, sensor frame.
+    pub lines: Vec<SensorLine>,
+}
+
+/// Why a verified candidate was not used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[non_exhaustive]
+pub enum LoopOutcome {
+    /// Accepted: the graph has an edge for it.
+    Accepted,
+    /// Accepted, later switched off by the optimizer's chi-square test.
+    SwitchedOff,
+    /// Too little wall matched.
+    TooLittleMatched,
+    /// The matches leave a direction unconstrained (a corridor).
+    Unconstrained,
+    /// The matched lines lie too far apart after the alignment.
+    LargeResidual,
+    /// One keyframe's lines see through the other's walls.
+    SeesThroughWalls,
+}
+
+/// A loop candidate that [`align_lines`] aligned, and what came of it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopRecord {
+    /// The current keyframe.
+    pub keyframe: usize,
+    /// The older keyframe it was aligned with.
+    pub candidate: usize,
+    /// The graph edge, when accepted.
+    pub edge: Option<usize>,
+    /// `candidate_from_current` the alignment found.
+    pub candidate_from_current: Pose2,
+    /// Matched wall length, metres.
+    pub matched_length_m: f64,
+    /// Wall length in the weakest direction, metres.
+    pub weakest_direction_m: f64,
+    /// Rms endpoint residual, metres.
+    pub rms_m: f64,
+    /// The larger see-through fraction of the two directions.
+    pub see_through: f64,
+    /// What came of it.
+    pub outcome: LoopOutcome,
+}
+
+/// What one scan did in [`LoopClosing`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopStep {
+    /// The corrected `world_from_sensor` (after the optimization, if one ran).
+    pub pose: Pose2,
+    /// The estimator's report.
+    pub report: StepReport,
+    /// The keyframe the scan became, if it did.
+    pub keyframe: Option<usize>,
+    /// Loop edges the scan added.
+    pub loops_added: usize,
+    /// The optimization the scan triggered ([`OptimizeSchedule::AfterLoop`]).
+    pub optimized: Option<OptimizeReport>,
+}
+
+/// The estimator with keyframes, loop closure and a pose graph; see the
+/// module documentation.
+///
+/// ```
+/// use pcaline_aiding::{AidingConfig, LoopClosing, LoopClosureConfig, SensorLine};
+/// use pcaline_geometry::Pose2;
+/// use pcaline_mapping::MapConfig;
+///
+/// let mut slam =
+///     LoopClosing::new(AidingConfig::estimator(), MapConfig::default(), LoopClosureConfig::standard())
+///         .unwrap();
+/// let lines: Vec<SensorLine> = Vec::new();
+/// let step = slam.step_at(0.0, &Pose2::identity(), &lines);
+/// assert_eq!(step.keyframe, Some(0));
+/// assert_eq!(slam.graph().nodes.len(), 1);
+/// ```
+#[derive(Debug, Clone)]
+pub struct LoopClosing {
+    aiding: Aiding,
+    config: LoopClosureConfig,
+    graph: PoseGraph,
+    keyframes: Vec<Keyframe>,
+    loops: Vec<LoopRecord>,
+    /// Each scan's keyframe and its pose in that keyframe's frame (`None`
+    /// for a scan before the first keyframe).
+    scans: Vec<Option<(usize, Pose2)>>,
+    /// The keyframe after which loop search resumes.
+    quiet_until: usize,
+    optimizations: usize,
+}
+
+impl LoopClosing {
+    /// An empty graph and map.
+    pub fn new(
+        aiding: AidingConfig,
+        map: MapConfig,
+        config: LoopClosureConfig,
+    ) -> Result<Self, ConfigError> {
+        config.validate()?;
+        Ok(LoopClosing {
+            aiding: Aiding::new(aiding, map)?,
+            config,
+            graph: PoseGraph::new(),
+            keyframes: Vec::new(),
+            loops: Vec::new(),
+            scans: Vec::new(),
+            quiet_until: 0,
+            optimizations: 0,
+        })
+    }
+
+    /// One scan with the source's pose, stamped ([`Aiding::step_at`]).
+    pub fn step_at(&mut self, stamp_s: f64, source: &Pose2, lines: &[SensorLine]) -> LoopStep {
+        let (pose, report) = self.aiding.step_at(stamp_s, source, lines);
+        self.after_step(pose, report, Some(stamp_s), lines)
+    }
+
+    /// One scan with the source's pose, unstamped ([`Aiding::step`]).
+    pub fn step(&mut self, source: &Pose2, lines: &[SensorLine]) -> LoopStep {
+        let (pose, report) = self.aiding.step(source, lines);
+        self.after_step(pose, report, None, lines)
+    }
+
+    /// One scan without a source ([`Aiding::step_without_source`]).
+    pub fn step_without_source(&mut self, stamp_s: Option<f64>, lines: &[SensorLine]) -> LoopStep {
+        let (pose, report) = self.aiding.step_without_source(stamp_s, lines);
+        self.after_step(pose, report, stamp_s, lines)
+    }
+
+    /// The estimator (its map, pose, covariance and calibration).
+    pub fn aiding(&self) -> &Aiding {
+        &self.aiding
+    }
+
+    /// The line map (rebuilt from the keyframes after each optimization).
+    pub fn map(&self) -> &LineMap {
+        self.aiding.map()
+    }
+
+    /// The latest corrected pose.
+    pub fn pose(&self) -> Option<Pose2> {
+        self.aiding.pose()
+    }
+
+    /// The pose graph: one node per keyframe.
+    pub fn graph(&self) -> &PoseGraph {
+        &self.graph
+    }
+
+    /// The keyframes, in the graph's node order.
+    pub fn keyframes(&self) -> &[Keyframe] {
+        &self.keyframes
+    }
+
+    /// Every aligned loop candidate, accepted or not.
+    pub fn loops(&self) -> &[LoopRecord] {
+        &self.loops
+    }
+
+    /// Optimizations run so far.
+    pub fn optimizations(&self) -> usize {
+        self.optimizations
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &LoopClosureConfig {
+        &self.config
+    }
+
+    /// Every scan's `world_from_sensor` as the graph now places it: its
+    /// keyframe's node composed with the scan's pose relative to it. After
+    /// a final [`LoopClosing::optimize`], this is the optimized trajectory.
+    /// A scan before the first keyframe (its pose was not finite) has none.
+    pub fn trajectory(&self) -> Vec<Option<Pose2>> {
+        self.scans
+            .iter()
+            .map(|s| s.and_then(|(k, rel)| self.graph.nodes.get(k).map(|n| n.compose(&rel))))
+            .collect()
+    }
+
+    fn after_step(
+        &mut self,
+        pose: Pose2,
+        report: StepReport,
+        stamp_s: Option<f64>,
+        lines: &[SensorLine],
+    ) -> LoopStep {
+        let scan = self.scans.len();
+        let mut step = LoopStep { pose, report, keyframe: None, loops_added: 0, optimized: None };
+        let last = self.graph.nodes.last().copied();
+        let is_keyframe = match last {
+            None => true,
+            Some(k) => {
+                let rel = k.between(&pose);
+                rel.x.hypot(rel.y) >= self.config.keyframe_distance_m
+                    || wrap_angle(rel.heading).abs() >= self.config.keyframe_turn_rad
+            }
+        };
+        if !is_keyframe || !pose.is_finite() {
+            let k = self.graph.nodes.len().saturating_sub(1);
+            let rel = last.map(|n| n.between(&pose)).filter(Pose2::is_finite);
+            self.scans.push(last.map(|_| (k, rel.unwrap_or_default())));
+            return step;
+        }
+        let node = self.graph.add_node(pose);
+        let path_m = match (last, self.keyframes.last()) {
+            (Some(k), Some(prev)) => {
+                let rel = k.between(&pose);
+                let motion = self.aiding.config().estimator.motion;
+                self.graph.add_edge(
+                    node - 1,
+                    node,
+                    rel,
+                    motion.covariance(&rel),
+                    EdgeKind::Sequential,
+                );
+                prev.path_m + rel.x.hypot(rel.y)
+            }
+            _ => 0.0,
+        };
+        self.keyframes.push(Keyframe { scan, stamp_s, path_m, lines: lines.to_vec() });
+        self.scans.push(Some((node, Pose2::identity())));
+        step.keyframe = Some(node);
+        if node >= self.quiet_until {
+            step.loops_added = self.close_loops(node);
+        }
+        if step.loops_added > 0 {
+            self.quiet_until = node + 1 + self.config.loop_spacing_keyframes;
+            if self.config.schedule == OptimizeSchedule::AfterLoop {
+                let report = self.optimize();
+                step.pose = self.aiding.pose().unwrap_or(step.pose);
+                step.optimized = Some(report);
+            }
+        }
+        step
+    }
+
+    /// The lines of keyframes `range` in the frame of keyframe `frame`, each
+    /// with the position it was seen from.
+    fn local_lines(
+        &self,
+        frame: usize,
+        range: std::ops::RangeInclusive<usize>,
+    ) -> Vec<(LineSegment, Point2<f64>)> {
+        let origin = self.graph.nodes[frame];
+        let mut out = Vec::new();
+        for k in range {
+            let t = origin.between(&self.graph.nodes[k]);
+            let viewpoint = Point2::new(t.x, t.y);
+            out.extend(self.keyframes[k].lines.iter().map(|l| (l.line.transformed(&t), viewpoint)));
+        }
+        out
+    }
+
+    /// Looks for loops from keyframe `current`; returns the edges added.
+    fn close_loops(&mut self, current: usize) -> usize {
+        let c = self.config;
+        let here = self.graph.nodes[current];
+        let path_here = self.keyframes[current].path_m;
+        // Candidates within the search radius, nearest first, one per
+        // stretch of `submap_keyframes`.
+        let mut candidates: Vec<(f64, usize, f64)> = (0..current)
+            .filter_map(|j| {
+                let travel = path_here - self.keyframes[j].path_m;
+                if travel < c.min_loop_path_m {
+                    return None;
+                }
+                let n = self.graph.nodes[j];
+                let distance = (n.x - here.x).hypot(n.y - here.y);
+                let radius =
+                    (c.search_radius_m + c.search_radius_per_m * travel).min(c.max_search_radius_m);
+                (distance <= radius).then_some((distance, j, travel))
+            })
+            .collect();
+        candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut chosen: Vec<(usize, f64)> = Vec::new();
+        for (_, j, travel) in candidates {
+            if chosen.len() >= c.max_candidates {
+                break;
+            }
+            if chosen.iter().all(|(k, _)| k.abs_diff(j) > c.submap_keyframes) {
+                chosen.push((j, travel));
+            }
+        }
+        if chosen.is_empty() {
+            return 0;
+        }
+        let first = current.saturating_sub(c.submap_keyframes);
+        let current_seen = self.local_lines(current, first..=current);
+        let current_lines: Vec<LineSegment> = current_seen.iter().map(|(l, _)| *l).collect();
+        let mut best: Option<(usize, Alignment, f64)> = None;
+        for (j, travel) in chosen {
+            let lo = j.saturating_sub(c.submap_keyframes);
+            let hi = (j + c.submap_keyframes).min(first.saturating_sub(1)).max(j);
+            let candidate_seen = self.local_lines(j, lo..=hi);
+            let candidate_lines: Vec<LineSegment> =
+                candidate_seen.iter().map(|(l, _)| *l).collect();
+            let prior = AlignmentPrior {
+                candidate_from_current: self.graph.nodes[j].between(&here),
+                radius_m: (c.search_radius_m + c.search_radius_per_m * travel)
+                    .min(c.max_search_radius_m),
+                max_rotation_rad: (c.search_rotation_rad + c.search_rotation_per_m * travel)
+                    .min(std::f64::consts::PI),
+            };
+            let Some(a) = align_lines(&current_lines, &candidate_lines, Some(&prior), &c.alignment)
+            else {
+                continue;
+            };
+            let see_through = {
+                let t = a.candidate_from_current;
+                let in_candidate: Vec<(LineSegment, Point2<f64>)> = current_seen
+                    .iter()
+                    .map(|(l, v)| (l.transformed(&t), t.transform_point(v)))
+                    .collect();
+                let t_inv = t.inverse();
+                let in_current: Vec<(LineSegment, Point2<f64>)> = candidate_seen
+                    .iter()
+                    .map(|(l, v)| (l.transformed(&t_inv), t_inv.transform_point(v)))
+                    .collect();
+                see_through_fraction(&in_candidate, &candidate_lines, SEE_THROUGH_MARGIN_M)
+                    .max(see_through_fraction(&in_current, &current_lines, SEE_THROUGH_MARGIN_M))
+            };
+            let outcome = if a.matched_length_m < c.min_matched_length_m
+                || a.matched_length_m < c.min_matched_fraction * a.current_length_m
+            {
+                LoopOutcome::TooLittleMatched
+            } else if a.weakest_direction_m < c.min_weakest_direction_m {
+                LoopOutcome::Unconstrained
+            } else if a.rms_m > c.max_rms_m {
+                LoopOutcome::LargeResidual
+            } else if see_through > c.max_see_through {
+                LoopOutcome::SeesThroughWalls
+            } else {
+                LoopOutcome::Accepted
+            };
+            if outcome != LoopOutcome::Accepted {
+                self.loops.push(record(current, j, &a, see_through, outcome));
+                continue;
+            }
+            if best.as_ref().is_none_or(|(_, b, _)| a.matched_length_m > b.matched_length_m) {
+                best = Some((j, a, see_through));
+            }
+        }
+        let Some((j, a, see_through)) = best else { return 0 };
+        let covariance = loop_covariance(&a, c.loop_floor_m, c.loop_floor_rad);
+        let edge =
+            self.graph.add_edge(j, current, a.candidate_from_current, covariance, EdgeKind::Loop);
+        let mut r = record(current, j, &a, see_through, LoopOutcome::Accepted);
+        r.edge = Some(edge);
+        self.loops.push(r);
+        1
+    }
+
+    /// Optimizes the graph, marks the loops it switched off, rebuilds the
+    /// map from the keyframes at their optimized poses and carries the
+    /// estimator over. The report says why the poses were kept, if they were
+    /// ([`crate::NotOptimized`]); the map is then left as it is.
+    pub fn optimize(&mut self) -> OptimizeReport {
+        let Some(old_last) = self.graph.nodes.last().copied() else {
+            return self.graph.optimize(&self.config.optimizer);
+        };
+        let report = self.graph.optimize(&self.config.optimizer);
+        self.optimizations += 1;
+        for e in &report.switched_off {
+            if let Some(r) = self.loops.iter_mut().find(|r| r.edge == Some(*e)) {
+                r.outcome = LoopOutcome::SwitchedOff;
+            }
+        }
+        if report.kept.is_some() {
+            return report;
+        }
+        let new_last = *self.graph.nodes.last().unwrap_or(&old_last);
+        let new_from_old = new_last.compose(&old_last.inverse());
+        let map = self.rebuilt_map();
+        self.aiding.reanchor(map, &new_from_old);
+        report
+    }
+
+    /// The line map built again from every keyframe's lines at its node's
+    /// pose, in keyframe order.
+    fn rebuilt_map(&self) -> LineMap {
+        let config = *self.aiding.map().config();
+        // The configuration was validated when the map was first built.
+        let mut map = match LineMap::new(config) {
+            Ok(m) => m,
+            Err(_) => return self.aiding.map().clone(),
+        };
+        for (k, node) in self.keyframes.iter().zip(&self.graph.nodes) {
+            map.begin_scan();
+            let viewpoint = Point2::new(node.x, node.y);
+            for l in &k.lines {
+                let line = l.line.transformed(node);
+                let moments = l.moments.transformed(node);
+                map.insert_seen_from(&line, &moments, Some(&viewpoint));
+            }
+        }
+        map
+    }
+}
+
+fn record(
+    keyframe: usize,
+    candidate: usize,
+    a: &Alignment,
+    see_through: f64,
+    outcome: LoopOutcome,
+) -> LoopRecord {
+    LoopRecord {
+        keyframe,
+        candidate,
+        edge: None,
+        candidate_from_current: a.candidate_from_current,
+        matched_length_m: a.matched_length_m,
+        weakest_direction_m: a.weakest_direction_m,
+        rms_m: a.rms_m,
+        see_through,
+        outcome,
+    }
+}
+
+/// A loop edge's covariance: the alignment's least-squares covariance for
+/// its residual, per endpoint of unit weight, with the floors added.
+fn loop_covariance(a: &Alignment, floor_m: f64, floor_rad: f64) -> Matrix3<f64> {
+    let floors =
+        Matrix3::from_diagonal(&Vector3::new(floor_m.powi(2), floor_m.powi(2), floor_rad.powi(2)));
+    // The information is in metres of wall; one endpoint per half metre.
+    let info = a.information * 2.0 / a.rms_m.max(0.01).powi(2);
+    match info.try_inverse() {
+        Some(c) if c.iter().all(|v| v.is_finite()) => c + floors,
+        _ => floors * 100.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pcaline_fitting::Moments;
+
+    /// The walls of a 6 m x 4 m room with a pillar, centred at `(cx, 0)`.
+    fn room(cx: f64) -> Vec<(Point2<f64>, Point2<f64>)> {
+        let p = |x: f64, y: f64| Point2::new(cx + x, y);
+        vec![
+            (p(-3.0, -2.0), p(3.0, -2.0)),
+            (p(3.0, -2.0), p(3.0, 2.0)),
+            (p(3.0, 2.0), p(-3.0, 2.0)),
+            (p(-3.0, 2.0), p(-3.0, -2.0)),
+            (p(1.0, 0.0), p(1.6, 0.0)),
+            (p(1.6, 0.0), p(1.6, 0.8)),
+        ]
+    }
+
+    /// The walls seen from `pose` (all of them: no occlusion), sensor frame.
+    fn seen(walls: &[(Point2<f64>, Point2<f64>)], pose: &Pose2) -> Vec<SensorLine> {
+        let inv = pose.inverse();
+        walls
+            .iter()
+            .map(|(a, b)| {
+                let (a, b) = (inv.transform_point(a), inv.transform_point(b));
+                let points: Vec<Point2<f64>> =
+                    (0..=20).map(|k| a + (b - a) * (k as f64 / 20.0)).collect();
+                let mid = Point2::from((a.coords + b.coords) / 2.0);
+                SensorLine {
+                    line: LineSegment::through(mid, b - a, a, b),
+                    moments: Moments::from_points(&points),
+                }
+            })
+            .collect()
+    }
+
+    /// Laps around a room centred at `(cx, 0)`, 0.25 m per scan.
+    fn laps(cx: f64, laps: usize) -> Vec<Pose2> {
+        let n = 60;
+        (0..laps * n)
+            .map(|k| {
+                let a = k as f64 / n as f64 * std::f64::consts::TAU;
+                Pose2::new(cx + 1.5 * a.cos(), 1.0 * a.sin(), a + std::f64::consts::FRAC_PI_2)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn twin_rooms_do_not_close_a_false_loop() {
+        let (a, b) = (room(0.0), room(20.0));
+        let mut slam = LoopClosing::new(
+            AidingConfig::estimator(),
+            MapConfig::default(),
+            LoopClosureConfig::standard(),
+        )
+        .unwrap();
+        // Three laps in room A, a corridor walk with no walls in view, three laps
+        // in room B, with a slow heading drift in the source.
+        let mut truth = laps(0.0, 3);
+        let from = *truth.last().unwrap();
+        for k in 1..=40 {
+            let f = k as f64 / 40.0;
+            truth.push(Pose2::new(from.x + f * 18.5, from.y * (1.0 - f), 0.0));
+        }
+        truth.extend(laps(20.0, 3));
+        let mut source = Pose2::identity();
+        let mut previous = truth[0];
+        for (k, pose) in truth.iter().enumerate() {
+            let step = previous.between(pose);
+            source = source.compose(&Pose2::new(step.x, step.y, step.heading + 0.001));
+            previous = *pose;
+            let walls = if pose.x < 5.0 {
+                &a
+            } else if pose.x > 15.0 {
+                &b
+            } else {
+                &Vec::new()
+            };
+            slam.step_at(k as f64 * 0.1, &source, &seen(walls, pose));
+        }
+        slam.optimize();
+        let in_room_a = |node: usize| slam.graph().nodes[node].x < 10.0;
+        let false_loops = slam
+            .graph()
+            .edges
+            .iter()
+            .filter(|e| e.kind == EdgeKind::Loop && e.active)
+            .filter(|e| in_room_a(e.from) != in_room_a(e.to))
+            .count();
+        assert_eq!(false_loops, 0);
+        // The true loops in each room were found.
+        let accepted = slam.loops().iter().filter(|r| r.outcome == LoopOutcome::Accepted).count();
+        assert!(
+            accepted >= 2,
+            "{} keyframes, path {:?}",
+            slam.keyframes().len(),
+            slam.keyframes().last().map(|k| k.path_m)
+        );
+    }
+
+    #[test]
+    fn validation_names_the_field_path() {
+        let mut c = LoopClosureConfig::standard();
+        c.max_search_radius_m = -1.0;
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("loop_closure.max_search_radius_m"), "{e}");
+        let mut c = LoopClosureConfig::standard();
+        c.optimizer.rounds = 0;
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("loop_closure.optimizer.rounds"), "{e}");
+    }
+}
