@@ -314,6 +314,7 @@ pub struct LoopClosing {
     /// The keyframe after which loop search resumes.
     quiet_until: usize,
     optimizations: usize,
+    last_optimization: Option<OptimizeReport>,
 }
 
 impl LoopClosing {
@@ -333,6 +334,7 @@ impl LoopClosing {
             scans: Vec::new(),
             quiet_until: 0,
             optimizations: 0,
+            last_optimization: None,
         })
     }
 
@@ -387,6 +389,11 @@ impl LoopClosing {
     /// Optimizations run so far.
     pub fn optimizations(&self) -> usize {
         self.optimizations
+    }
+
+    /// The report of the last optimization, if one ran.
+    pub fn last_optimization(&self) -> Option<&OptimizeReport> {
+        self.last_optimization.as_ref()
     }
 
     /// The configuration.
@@ -588,6 +595,7 @@ impl LoopClosing {
         };
         let report = self.graph.optimize(&self.config.optimizer);
         self.optimizations += 1;
+        self.last_optimization = Some(report.clone());
         for e in &report.switched_off {
             if let Some(r) = self.loops.iter_mut().find(|r| r.edge == Some(*e)) {
                 r.outcome = LoopOutcome::SwitchedOff;

@@ -21,7 +21,7 @@
 
 use crate::exit::BadInput;
 use anyhow::Result;
-use pcaline::aiding::{AidingConfig, AidingMode};
+use pcaline::aiding::{AidingConfig, AidingMode, LoopClosureConfig};
 use pcaline::mapping::MapConfig;
 use pcaline::segmentation::NoiseEstimation;
 use pcaline::{Config, RangeNoise};
@@ -46,6 +46,8 @@ pub struct NamedConfig {
     /// The aiding (the estimator by default; `pcaline map --aiding` and the
     /// evaluation's comparison modes replace its mode, not its settings).
     pub aiding: AidingConfig,
+    /// Loop closure (`pcaline map` closes loops unless `--no-loop-closure`).
+    pub loop_closure: LoopClosureConfig,
 }
 
 impl NamedConfig {
@@ -75,6 +77,7 @@ struct ConfigFile {
     detector: Config,
     map: MapConfig,
     aiding: AidingConfig,
+    loop_closure: LoopClosureConfig,
 }
 
 /// The preset `name`; `told-sigma` is the default detector told the range
@@ -102,6 +105,7 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
             detector,
             map,
             aiding: AidingConfig::estimator(),
+            loop_closure: LoopClosureConfig::standard(),
         });
     }
     let path = Path::new(spec);
@@ -139,8 +143,14 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
         .into());
     };
     let aiding = AidingConfig::estimator();
-    let mut merged =
-        Value::try_from(ConfigFile { preset: base_name.into(), detector, map, aiding })?;
+    let loop_closure = LoopClosureConfig::standard();
+    let mut merged = Value::try_from(ConfigFile {
+        preset: base_name.into(),
+        detector,
+        map,
+        aiding,
+        loop_closure,
+    })?;
     merge(&mut merged, &overrides, "").map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
     let file: ConfigFile =
         merged.try_into().map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
@@ -148,6 +158,7 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
         .validate()
         .and_then(|()| file.map.validate())
         .and_then(|()| file.aiding.validate())
+        .and_then(|()| file.loop_closure.validate())
         .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
     Ok(NamedConfig {
         name: spec.to_string(),
@@ -155,6 +166,7 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
         detector: file.detector,
         map: file.map,
         aiding: file.aiding,
+        loop_closure: file.loop_closure,
     })
 }
 
@@ -168,7 +180,8 @@ pub fn show(name: &str) -> Result<String> {
         .into());
     };
     let aiding = AidingConfig::estimator();
-    Ok(toml::to_string(&ConfigFile { preset: name.into(), detector, map, aiding })?)
+    let loop_closure = LoopClosureConfig::standard();
+    Ok(toml::to_string(&ConfigFile { preset: name.into(), detector, map, aiding, loop_closure })?)
 }
 
 /// Writes `overrides` into `base`: objects key by key, anything else whole.
@@ -246,8 +259,8 @@ mod tests {
             let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
             let p = resolve(name, 0.01).unwrap();
             assert_eq!(
-                (c.detector, c.map, c.aiding),
-                (p.detector, p.map, p.aiding),
+                (c.detector, c.map, c.aiding, c.loop_closure),
+                (p.detector, p.map, p.aiding, p.loop_closure),
                 "{name}:\n{text}"
             );
         }
@@ -288,6 +301,11 @@ mod tests {
             ("invalid.toml", "preset = \"default\"\n[detector.fitting]\neth = 0.5\n", "eth"),
             ("type.toml", "preset = \"default\"\n[map]\nmax_d_rho_m = \"far\"\n", "invalid type"),
             ("syntax.toml", "preset = \n", "not TOML"),
+            (
+                "loops.toml",
+                "preset = \"default\"\n[loop_closure]\nmax_search_radius_m = -1.0\n",
+                "loop_closure.max_search_radius_m",
+            ),
         ];
         for (name, text, expect) in cases {
             let path = write(name, text);

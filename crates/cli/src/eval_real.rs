@@ -6,10 +6,9 @@
 //! of the UTM-30LX-EW bag.
 
 use crate::config_file::NamedConfig;
+use crate::runner::Runner;
 use anyhow::{Context, Result};
-use pcaline::aiding::{
-    Aiding, AidingConfig, AidingMode, LoopClosing, LoopClosureConfig, SensorLine,
-};
+use pcaline::aiding::{Aiding, AidingConfig, AidingMode, LoopClosureConfig, SensorLine};
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
     RelationErrors, StampedTrajectory, aligned_trajectory_errors, relation_errors,
@@ -50,53 +49,13 @@ fn modes(config: &NamedConfig) -> [(&'static str, AidingConfig, Option<LoopClosu
         ("heading-aided", AidingConfig::heading(), None),
         ("full-pose aided", AidingConfig::full_pose(), None),
         ("estimator-aided", estimator, None),
-        ("estimator + loop closure", estimator, Some(LoopClosureConfig::standard())),
+        ("estimator + loop closure", estimator, Some(config.loop_closure)),
     ]
 }
 
-/// One mode's loop: the aiding alone, or with loop closure.
-enum Runner {
-    Plain(Box<Aiding>),
-    Loops(Box<LoopClosing>),
-}
-
-impl Runner {
-    fn new(
-        aiding: AidingConfig,
-        loops: Option<LoopClosureConfig>,
-        config: &NamedConfig,
-    ) -> Result<Self> {
-        Ok(match loops {
-            None => Runner::Plain(Box::new(Aiding::new(aiding, config.map)?)),
-            Some(l) => Runner::Loops(Box::new(LoopClosing::new(aiding, config.map, l)?)),
-        })
-    }
-
-    fn all(config: &NamedConfig) -> Result<Vec<Runner>> {
-        modes(config).iter().map(|(_, a, l)| Runner::new(*a, *l, config)).collect()
-    }
-
-    fn step(&mut self, stamp_s: Option<f64>, source: &Pose2, lines: &[SensorLine]) -> Pose2 {
-        match (self, stamp_s) {
-            (Runner::Plain(a), Some(t)) => a.step_at(t, source, lines).0,
-            (Runner::Plain(a), None) => a.step(source, lines).0,
-            (Runner::Loops(l), Some(t)) => l.step_at(t, source, lines).pose,
-            (Runner::Loops(l), None) => l.step(source, lines).pose,
-        }
-    }
-
-    /// With loop closure: a last optimization, then every stepped scan's
-    /// pose as the graph places it; `None` for the aiding alone (its poses
-    /// are final as they come).
-    fn finish(&mut self) -> Option<Vec<Pose2>> {
-        match self {
-            Runner::Plain(_) => None,
-            Runner::Loops(l) => {
-                l.optimize();
-                Some(l.trajectory().into_iter().map(|p| p.unwrap_or_default()).collect())
-            }
-        }
-    }
+/// One loop per mode.
+fn runners(config: &NamedConfig) -> Result<Vec<Runner>> {
+    modes(config).iter().map(|(_, a, l)| Runner::new(*a, config.map, *l)).collect()
 }
 
 /// One trajectory against a reference: absolute errors after aligning at the
@@ -230,7 +189,7 @@ impl Loops {
     fn new(config: &NamedConfig) -> Result<Self> {
         Ok(Loops {
             detector: LineDetector::new(config.detector)?,
-            loops: Runner::all(config)?,
+            loops: runners(config)?,
             lines: Vec::new(),
         })
     }
@@ -240,7 +199,7 @@ impl Loops {
         self.lines.clear();
         self.lines.extend(self.detector.detect(scan).lines.iter().map(SensorLine::from));
         let lines = &self.lines;
-        self.loops.iter_mut().map(|a| a.step(scan.stamp_s, source, lines)).collect()
+        self.loops.iter_mut().map(|a| a.step(scan.stamp_s, source, lines).0).collect()
     }
 
     /// Replaces the poses of the loop-closing modes by their optimized
@@ -248,7 +207,9 @@ impl Loops {
     fn finish(&mut self, poses: &mut [Vec<Pose2>]) {
         for (runner, out) in self.loops.iter_mut().zip(poses) {
             if let Some(final_poses) = runner.finish() {
-                *out = final_poses;
+                for (o, p) in out.iter_mut().zip(final_poses) {
+                    *o = p.unwrap_or(*o);
+                }
             }
         }
     }
@@ -381,7 +342,7 @@ fn intel_run(
     source: &[Pose2],
     config: &NamedConfig,
 ) -> Result<Vec<Vec<Pose2>>> {
-    let mut loops = Runner::all(config)?;
+    let mut loops = runners(config)?;
     let mut out: Vec<Vec<Pose2>> = vec![Vec::with_capacity(records.len()); loops.len()];
     let mut at_last_scan: Option<(Pose2, Vec<Pose2>)> = None;
     // Each record's last scan (counted) and the source's motion since it.
@@ -390,8 +351,10 @@ fn intel_run(
     for (record, source) in records.iter().zip(source) {
         let poses: Vec<Pose2> = match (&record.lines, &at_last_scan) {
             (Some(lines), _) => {
-                let poses: Vec<Pose2> =
-                    loops.iter_mut().map(|a| a.step(Some(record.time_s), source, lines)).collect();
+                let poses: Vec<Pose2> = loops
+                    .iter_mut()
+                    .map(|a| a.step(Some(record.time_s), source, lines).0)
+                    .collect();
                 at_last_scan = Some((*source, poses.clone()));
                 since_scan.push(Some((scans, Pose2::default())));
                 scans += 1;
@@ -414,8 +377,9 @@ fn intel_run(
     for (runner, o) in loops.iter_mut().zip(&mut out) {
         if let Some(at_scans) = runner.finish() {
             for (pose, since) in o.iter_mut().zip(&since_scan) {
-                if let Some((k, motion)) = since {
-                    *pose = at_scans[*k].compose(motion);
+                if let Some(at) = since.and_then(|(k, motion)| Some(at_scans[k]?.compose(&motion)))
+                {
+                    *pose = at;
                 }
             }
         }

@@ -20,6 +20,7 @@ mod picture;
 mod progress;
 mod reproduce;
 mod run;
+mod runner;
 mod scene_cmd;
 mod svg;
 

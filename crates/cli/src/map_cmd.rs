@@ -5,13 +5,12 @@ use crate::exit::BadInput;
 use crate::log_args::LogArgs;
 use crate::picture::write_svg_and_png;
 use crate::progress;
+use crate::runner::Runner;
 use crate::svg::Plot;
 use anyhow::Result;
 use clap::ValueEnum;
 use pcaline::LineDetector;
-use pcaline::aiding::{
-    Aiding, AidingMode, EdgeKind, LoopClosing, LoopClosureConfig, LoopOutcome, SensorLine,
-};
+use pcaline::aiding::{AidingMode, EdgeKind, LoopOutcome, SensorLine};
 use pcaline_io::{LogRecord, read_log, write_json, write_map_csv, write_map_json};
 use serde::Serialize;
 use std::ops::ControlFlow;
@@ -99,15 +98,8 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
     let mut detector = LineDetector::new(config.detector)?;
-    let mut aiding = if args.no_loop_closure {
-        Runner::Plain(Box::new(Aiding::new(aiding_config, config.map)?))
-    } else {
-        Runner::Loops(Box::new(LoopClosing::new(
-            aiding_config,
-            config.map,
-            LoopClosureConfig::standard(),
-        )?))
-    };
+    let loops = (!args.no_loop_closure).then_some(config.loop_closure);
+    let mut aiding = Runner::new(aiding_config, config.map, loops)?;
     let bar = progress::spinner("scans", quiet);
     let mut poses: Vec<PoseOut> = Vec::new();
     let mut lines: Vec<SensorLine> = Vec::new();
@@ -131,8 +123,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             detector.detect_moving(&s.scan, velocity.as_ref()).lines.iter().map(SensorLine::from),
         );
         let (pose, report) = match (source, s.scan.stamp_s) {
-            (Some(p), Some(t)) => aiding.step_at(t, &p, &lines),
-            (Some(p), None) => aiding.step(&p, &lines),
+            (Some(p), stamp) => aiding.step(stamp, &p, &lines),
             (None, stamp) => {
                 // No motion source: LIDAR-only mode, the last estimated
                 // motion repeated as the prediction, the lines estimating it.
@@ -155,7 +146,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     if poses.is_empty() {
         return Err(BadInput(format!("{}: no scans", args.log.display())).into());
     }
-    let graph = aiding.finish(&mut poses);
+    let graph = finish(&mut aiding, &mut poses);
     std::fs::create_dir_all(&args.out)?;
     let map_path = args.out.join("map.json");
     write_map_json(&map_path, aiding.map())?;
@@ -216,161 +207,94 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-/// The estimator alone, or with loop closure.
-enum Runner {
-    Plain(Box<Aiding>),
-    Loops(Box<LoopClosing>),
-}
-
-impl Runner {
-    fn aiding(&self) -> &Aiding {
-        match self {
-            Runner::Plain(a) => a,
-            Runner::Loops(l) => l.aiding(),
+/// With loop closure: a last optimization, the trajectory replaced by the
+/// optimized one, and the graph to write.
+fn finish(runner: &mut Runner, poses: &mut [PoseOut]) -> Option<GraphOut> {
+    let trajectory = runner.finish()?;
+    let l = runner.loop_closing()?;
+    for (out, p) in poses.iter_mut().zip(trajectory) {
+        if let Some(p) = p {
+            out.aided = [p.x, p.y, p.heading];
         }
     }
-
-    fn velocity(&self) -> Option<pcaline::Pose2> {
-        self.aiding().velocity()
-    }
-
-    fn map(&self) -> &pcaline::mapping::LineMap {
-        self.aiding().map()
-    }
-
-    fn step_at(
-        &mut self,
-        t: f64,
-        p: &pcaline::Pose2,
-        lines: &[SensorLine],
-    ) -> (pcaline::Pose2, pcaline::aiding::StepReport) {
-        match self {
-            Runner::Plain(a) => a.step_at(t, p, lines),
-            Runner::Loops(l) => {
-                let s = l.step_at(t, p, lines);
-                (s.pose, s.report)
-            }
-        }
-    }
-
-    fn step(
-        &mut self,
-        p: &pcaline::Pose2,
-        lines: &[SensorLine],
-    ) -> (pcaline::Pose2, pcaline::aiding::StepReport) {
-        match self {
-            Runner::Plain(a) => a.step(p, lines),
-            Runner::Loops(l) => {
-                let s = l.step(p, lines);
-                (s.pose, s.report)
-            }
-        }
-    }
-
-    fn step_without_source(
-        &mut self,
-        stamp: Option<f64>,
-        lines: &[SensorLine],
-    ) -> (pcaline::Pose2, pcaline::aiding::StepReport) {
-        match self {
-            Runner::Plain(a) => a.step_without_source(stamp, lines),
-            Runner::Loops(l) => {
-                let s = l.step_without_source(stamp, lines);
-                (s.pose, s.report)
-            }
-        }
-    }
-
-    /// With loop closure: a last optimization, the trajectory replaced by
-    /// the optimized one, and the graph to write.
-    fn finish(&mut self, poses: &mut [PoseOut]) -> Option<GraphOut> {
-        let Runner::Loops(l) = self else { return None };
-        let report = l.optimize();
-        for (out, p) in poses.iter_mut().zip(l.trajectory()) {
-            if let Some(p) = p {
-                out.aided = [p.x, p.y, p.heading];
-            }
-        }
-        let g = l.graph();
-        Some(GraphOut {
-            nodes: g
-                .nodes
-                .iter()
-                .zip(l.keyframes())
-                .map(|(n, k)| NodeOut {
-                    scan: k.scan,
-                    stamp_s: k.stamp_s,
-                    pose: [n.x, n.y, n.heading],
-                })
-                .collect(),
-            edges: g
-                .edges
-                .iter()
-                .map(|e| EdgeOut {
-                    from: e.from,
-                    to: e.to,
-                    kind: match e.kind {
-                        EdgeKind::Loop => "loop",
-                        _ => "sequential",
-                    },
-                    active: e.active,
-                    from_from_to: [e.from_from_to.x, e.from_from_to.y, e.from_from_to.heading],
-                    covariance: [
-                        e.covariance
-                            .row(0)
-                            .iter()
-                            .copied()
-                            .collect::<Vec<_>>()
-                            .try_into()
-                            .unwrap_or_default(),
-                        e.covariance
-                            .row(1)
-                            .iter()
-                            .copied()
-                            .collect::<Vec<_>>()
-                            .try_into()
-                            .unwrap_or_default(),
-                        e.covariance
-                            .row(2)
-                            .iter()
-                            .copied()
-                            .collect::<Vec<_>>()
-                            .try_into()
-                            .unwrap_or_default(),
-                    ],
-                })
-                .collect(),
-            loops: l
-                .loops()
-                .iter()
-                .map(|r| LoopOut {
-                    keyframe: r.keyframe,
-                    candidate: r.candidate,
-                    edge: r.edge,
-                    outcome: match r.outcome {
-                        LoopOutcome::Accepted => "accepted",
-                        LoopOutcome::SwitchedOff => "switched_off",
-                        LoopOutcome::TooLittleMatched => "too_little_matched",
-                        LoopOutcome::Unconstrained => "unconstrained",
-                        LoopOutcome::LargeResidual => "large_residual",
-                        LoopOutcome::SeesThroughWalls => "sees_through_walls",
-                        _ => "other",
-                    },
-                    candidate_from_current: [
-                        r.candidate_from_current.x,
-                        r.candidate_from_current.y,
-                        r.candidate_from_current.heading,
-                    ],
-                    matched_length_m: r.matched_length_m,
-                    weakest_direction_m: r.weakest_direction_m,
-                    rms_m: r.rms_m,
-                    see_through: r.see_through,
-                })
-                .collect(),
-            optimizations: l.optimizations(),
-            last_optimization_kept: report.kept.map(|k| format!("{k:?}")),
-        })
-    }
+    let g = l.graph();
+    Some(GraphOut {
+        nodes: g
+            .nodes
+            .iter()
+            .zip(l.keyframes())
+            .map(|(n, k)| NodeOut { scan: k.scan, stamp_s: k.stamp_s, pose: [n.x, n.y, n.heading] })
+            .collect(),
+        edges: g
+            .edges
+            .iter()
+            .map(|e| EdgeOut {
+                from: e.from,
+                to: e.to,
+                kind: match e.kind {
+                    EdgeKind::Loop => "loop",
+                    _ => "sequential",
+                },
+                active: e.active,
+                from_from_to: [e.from_from_to.x, e.from_from_to.y, e.from_from_to.heading],
+                covariance: [
+                    e.covariance
+                        .row(0)
+                        .iter()
+                        .copied()
+                        .collect::<Vec<_>>()
+                        .try_into()
+                        .unwrap_or_default(),
+                    e.covariance
+                        .row(1)
+                        .iter()
+                        .copied()
+                        .collect::<Vec<_>>()
+                        .try_into()
+                        .unwrap_or_default(),
+                    e.covariance
+                        .row(2)
+                        .iter()
+                        .copied()
+                        .collect::<Vec<_>>()
+                        .try_into()
+                        .unwrap_or_default(),
+                ],
+            })
+            .collect(),
+        loops: l
+            .loops()
+            .iter()
+            .map(|r| LoopOut {
+                keyframe: r.keyframe,
+                candidate: r.candidate,
+                edge: r.edge,
+                outcome: match r.outcome {
+                    LoopOutcome::Accepted => "accepted",
+                    LoopOutcome::SwitchedOff => "switched_off",
+                    LoopOutcome::TooLittleMatched => "too_little_matched",
+                    LoopOutcome::Unconstrained => "unconstrained",
+                    LoopOutcome::LargeResidual => "large_residual",
+                    LoopOutcome::SeesThroughWalls => "sees_through_walls",
+                    _ => "other",
+                },
+                candidate_from_current: [
+                    r.candidate_from_current.x,
+                    r.candidate_from_current.y,
+                    r.candidate_from_current.heading,
+                ],
+                matched_length_m: r.matched_length_m,
+                weakest_direction_m: r.weakest_direction_m,
+                rms_m: r.rms_m,
+                see_through: r.see_through,
+            })
+            .collect(),
+        optimizations: l.optimizations(),
+        last_optimization_kept: l
+            .last_optimization()
+            .and_then(|r| r.kept)
+            .map(|k| format!("{k:?}")),
+    })
 }
 
 /// `graph.json`: the pose graph after the last optimization.
