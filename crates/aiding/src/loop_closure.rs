@@ -10,9 +10,11 @@
 //! keyframe looks for loops:
 //!
 //! 1. **Candidates**: older keyframes at least
-//!    [`LoopClosureConfig::min_loop_path_m`] of travel back, within a search
-//!    radius that grows with the travel between them (the relative pose's
-//!    uncertainty, bounded by [`LoopClosureConfig::max_search_radius_m`]).
+//!    [`LoopClosureConfig::min_loop_path_m`] of travel back, within the
+//!    relative pose's uncertainty: the sequential edges' covariances summed
+//!    along the chain between them, heading error times the travel for the
+//!    position, [`LoopClosureConfig::search_sigmas`] standard deviations
+//!    (bounded by [`LoopClosureConfig::max_search_radius_m`]).
 //! 2. **Verification**: the lines of the last keyframes, in the current
 //!    keyframe's frame, are aligned to the lines around the candidate
 //!    ([`align_lines`]: RANSAC over line pairs, then least squares), and the
@@ -70,18 +72,26 @@ pub struct LoopClosureConfig {
     pub min_loop_path_m: f64,
     /// Search radius around the predicted relative pose: this, metres ...
     pub search_radius_m: f64,
-    /// ... plus this per metre travelled between the two keyframes ...
-    pub search_radius_per_m: f64,
+    /// ... plus this many standard deviations of the chain's position
+    /// uncertainty (and the same for the rotation) ...
+    pub search_sigmas: f64,
     /// ... at most this, metres.
     pub max_search_radius_m: f64,
-    /// Rotation search: this, radians ...
+    /// Rotation search: this, radians, plus `search_sigmas` standard
+    /// deviations of the chain's heading uncertainty (at most pi).
     pub search_rotation_rad: f64,
-    /// ... plus this per metre travelled, radians per metre (at most pi).
-    pub search_rotation_per_m: f64,
     /// Candidates verified per keyframe, nearest first.
     pub max_candidates: usize,
     /// After an accepted loop, this many keyframes look for none.
     pub loop_spacing_keyframes: usize,
+    /// A verified loop is added once another, from a keyframe at most this
+    /// many keyframes later, asks the graph for the same correction (0: no
+    /// confirmation) ...
+    pub confirm_keyframes: usize,
+    /// ... within this distance, metres ...
+    pub confirm_distance_m: f64,
+    /// ... and this rotation, radians.
+    pub confirm_rotation_rad: f64,
     /// Consistency test: matched wall length at least this, metres ...
     pub min_matched_length_m: f64,
     /// ... and at least this fraction of the current lines' length ...
@@ -95,6 +105,10 @@ pub struct LoopClosureConfig {
     /// walls over more than this fraction of their length
     /// ([`see_through_fraction`](crate::see_through_fraction)).
     pub max_see_through: f64,
+    /// The sequential edges' covariance: the estimator's motion model over
+    /// the motion between the keyframes, times this (the estimator's own
+    /// corrections against a drifted map are not in the model).
+    pub sequential_variance_scale: f64,
     /// Floors of a loop edge's standard deviations: position, metres ...
     pub loop_floor_m: f64,
     /// ... and heading, radians.
@@ -109,8 +123,8 @@ pub struct LoopClosureConfig {
 
 impl LoopClosureConfig {
     /// Defaults for indoor logs: a keyframe each 0.5 m or 15°, local sets of
-    /// 5 keyframes, loops at least 8 m of travel back within 1 m + 10% of
-    /// the travel (at most 8 m) and 20° + 1°/m, a consistency test of 3 m of
+    /// 5 keyframes, loops at least 8 m of travel back within 1 m and 10° plus
+    /// 3 sigmas of the chain's uncertainty (at most 8 m), a consistency test of 3 m of
     /// wall, 40% of the current lines, 1 m in the weakest direction and 4 cm
     /// rms; loop edges no tighter than 5 cm and 0.5°.
     pub fn standard() -> Self {
@@ -120,17 +134,20 @@ impl LoopClosureConfig {
             submap_keyframes: 5,
             min_loop_path_m: 8.0,
             search_radius_m: 1.0,
-            search_radius_per_m: 0.1,
+            search_sigmas: 3.0,
             max_search_radius_m: 8.0,
-            search_rotation_rad: 20f64.to_radians(),
-            search_rotation_per_m: 1f64.to_radians(),
+            search_rotation_rad: 10f64.to_radians(),
             max_candidates: 4,
             loop_spacing_keyframes: 5,
+            confirm_keyframes: 6,
+            confirm_distance_m: 0.3,
+            confirm_rotation_rad: 3f64.to_radians(),
             min_matched_length_m: 3.0,
             min_matched_fraction: 0.4,
             min_weakest_direction_m: 1.0,
             max_rms_m: 0.04,
             max_see_through: 0.5,
+            sequential_variance_scale: 1.0,
             loop_floor_m: 0.05,
             loop_floor_rad: 0.5f64.to_radians(),
             alignment: AlignmentConfig::standard(),
@@ -154,6 +171,9 @@ impl LoopClosureConfig {
             ("max_rms_m", self.max_rms_m),
             ("loop_floor_m", self.loop_floor_m),
             ("loop_floor_rad", self.loop_floor_rad),
+            ("sequential_variance_scale", self.sequential_variance_scale),
+            ("confirm_distance_m", self.confirm_distance_m),
+            ("confirm_rotation_rad", self.confirm_rotation_rad),
         ] {
             ConfigError::check_field(
                 v > 0.0 && v.is_finite(),
@@ -163,18 +183,13 @@ impl LoopClosureConfig {
                 "must be finite and > 0",
             )?;
         }
-        for (name, v) in [
-            ("search_radius_per_m", self.search_radius_per_m),
-            ("search_rotation_per_m", self.search_rotation_per_m),
-        ] {
-            ConfigError::check_field(
-                v >= 0.0 && v.is_finite(),
-                P,
-                name,
-                v,
-                "must be finite and >= 0",
-            )?;
-        }
+        ConfigError::check_field(
+            self.search_sigmas >= 0.0 && self.search_sigmas.is_finite(),
+            P,
+            "search_sigmas",
+            self.search_sigmas,
+            "must be finite and >= 0",
+        )?;
         ConfigError::check_field(
             (0.0..=1.0).contains(&self.max_see_through),
             P,
@@ -193,6 +208,7 @@ impl LoopClosureConfig {
             ("submap_keyframes", self.submap_keyframes, 100),
             ("max_candidates", self.max_candidates, 100),
             ("loop_spacing_keyframes", self.loop_spacing_keyframes, 10_000),
+            ("confirm_keyframes", self.confirm_keyframes, 100),
         ] {
             ConfigError::check_field(v <= max, P, name, v as f64, "is too large")?;
         }
@@ -223,6 +239,11 @@ pub struct Keyframe {
     pub stamp_s: Option<f64>,
     /// Travel from the first keyframe along the estimated path, metres.
     pub path_m: f64,
+    /// The sequential edges' heading variances summed from the first
+    /// keyframe, rad².
+    pub chain_heading_var: f64,
+    /// The same for the position (the mean of x and y), m².
+    pub chain_position_var: f64,
     /// The scan's lines, sensor frame.
     pub lines: Vec<SensorLine>,
 }
@@ -245,6 +266,9 @@ pub enum LoopOutcome {
     LargeResidual,
     /// One keyframe's lines see through the other's walls.
     SeesThroughWalls,
+    /// Verified, but no second loop from the next keyframes asked for the
+    /// same correction ([`LoopClosureConfig::confirm_keyframes`]).
+    Unconfirmed,
 }
 
 /// A loop candidate that [`align_lines`] aligned, and what came of it.
@@ -266,6 +290,9 @@ pub struct LoopRecord {
     pub rms_m: f64,
     /// The larger see-through fraction of the two directions.
     pub see_through: f64,
+    /// The alignment's information, unit endpoint noise
+    /// ([`Alignment::information`]).
+    pub information: Matrix3<f64>,
     /// What came of it.
     pub outcome: LoopOutcome,
 }
@@ -315,6 +342,8 @@ pub struct LoopClosing {
     quiet_until: usize,
     optimizations: usize,
     last_optimization: Option<OptimizeReport>,
+    /// Verified loops of the last keyframes, waiting for confirmation.
+    pending: Vec<PendingLoop>,
 }
 
 impl LoopClosing {
@@ -335,6 +364,7 @@ impl LoopClosing {
             quiet_until: 0,
             optimizations: 0,
             last_optimization: None,
+            pending: Vec::new(),
         })
     }
 
@@ -437,22 +467,28 @@ impl LoopClosing {
             return step;
         }
         let node = self.graph.add_node(pose);
-        let path_m = match (last, self.keyframes.last()) {
+        let (path_m, chain_heading_var, chain_position_var) = match (last, self.keyframes.last()) {
             (Some(k), Some(prev)) => {
                 let rel = k.between(&pose);
-                let motion = self.aiding.config().estimator.motion;
-                self.graph.add_edge(
-                    node - 1,
-                    node,
-                    rel,
-                    motion.covariance(&rel),
-                    EdgeKind::Sequential,
-                );
-                prev.path_m + rel.x.hypot(rel.y)
+                let cov = self.aiding.config().estimator.motion.covariance(&rel)
+                    * self.config.sequential_variance_scale;
+                self.graph.add_edge(node - 1, node, rel, cov, EdgeKind::Sequential);
+                (
+                    prev.path_m + rel.x.hypot(rel.y),
+                    prev.chain_heading_var + cov[(2, 2)],
+                    prev.chain_position_var + 0.5 * (cov[(0, 0)] + cov[(1, 1)]),
+                )
             }
-            _ => 0.0,
+            _ => (0.0, 0.0, 0.0),
         };
-        self.keyframes.push(Keyframe { scan, stamp_s, path_m, lines: lines.to_vec() });
+        self.keyframes.push(Keyframe {
+            scan,
+            stamp_s,
+            path_m,
+            chain_heading_var,
+            chain_position_var,
+            lines: lines.to_vec(),
+        });
         self.scans.push(Some((node, Pose2::identity())));
         step.keyframe = Some(node);
         if node >= self.quiet_until {
@@ -493,27 +529,36 @@ impl LoopClosing {
         let path_here = self.keyframes[current].path_m;
         // Candidates within the search radius, nearest first, one per
         // stretch of `submap_keyframes`.
-        let mut candidates: Vec<(f64, usize, f64)> = (0..current)
+        let kf = &self.keyframes[current];
+        let mut candidates: Vec<(f64, usize, f64, f64)> = (0..current)
             .filter_map(|j| {
-                let travel = path_here - self.keyframes[j].path_m;
+                let old = &self.keyframes[j];
+                let travel = path_here - old.path_m;
                 if travel < c.min_loop_path_m {
                     return None;
                 }
+                // The relative pose's uncertainty along the chain: the
+                // edges' variances, and the heading error's lever arm.
+                let var_heading = (kf.chain_heading_var - old.chain_heading_var).max(0.0);
+                let var_position = (kf.chain_position_var - old.chain_position_var).max(0.0)
+                    + var_heading * travel * travel / 3.0;
+                let radius = (c.search_radius_m + c.search_sigmas * var_position.sqrt())
+                    .min(c.max_search_radius_m);
+                let rotation = (c.search_rotation_rad + c.search_sigmas * var_heading.sqrt())
+                    .min(std::f64::consts::PI);
                 let n = self.graph.nodes[j];
                 let distance = (n.x - here.x).hypot(n.y - here.y);
-                let radius =
-                    (c.search_radius_m + c.search_radius_per_m * travel).min(c.max_search_radius_m);
-                (distance <= radius).then_some((distance, j, travel))
+                (distance <= radius).then_some((distance, j, radius, rotation))
             })
             .collect();
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut chosen: Vec<(usize, f64)> = Vec::new();
-        for (_, j, travel) in candidates {
+        let mut chosen: Vec<(usize, f64, f64)> = Vec::new();
+        for (_, j, radius, rotation) in candidates {
             if chosen.len() >= c.max_candidates {
                 break;
             }
-            if chosen.iter().all(|(k, _)| k.abs_diff(j) > c.submap_keyframes) {
-                chosen.push((j, travel));
+            if chosen.iter().all(|(k, _, _)| k.abs_diff(j) > c.submap_keyframes) {
+                chosen.push((j, radius, rotation));
             }
         }
         if chosen.is_empty() {
@@ -523,7 +568,7 @@ impl LoopClosing {
         let current_seen = self.local_lines(current, first..=current);
         let current_lines: Vec<LineSegment> = current_seen.iter().map(|(l, _)| *l).collect();
         let mut best: Option<(usize, Alignment, f64)> = None;
-        for (j, travel) in chosen {
+        for (j, radius_m, max_rotation_rad) in chosen {
             let lo = j.saturating_sub(c.submap_keyframes);
             let hi = (j + c.submap_keyframes).min(first.saturating_sub(1)).max(j);
             let candidate_seen = self.local_lines(j, lo..=hi);
@@ -531,10 +576,8 @@ impl LoopClosing {
                 candidate_seen.iter().map(|(l, _)| *l).collect();
             let prior = AlignmentPrior {
                 candidate_from_current: self.graph.nodes[j].between(&here),
-                radius_m: (c.search_radius_m + c.search_radius_per_m * travel)
-                    .min(c.max_search_radius_m),
-                max_rotation_rad: (c.search_rotation_rad + c.search_rotation_per_m * travel)
-                    .min(std::f64::consts::PI),
+                radius_m,
+                max_rotation_rad,
             };
             let Some(a) = align_lines(&current_lines, &candidate_lines, Some(&prior), &c.alignment)
             else {
@@ -576,13 +619,51 @@ impl LoopClosing {
             }
         }
         let Some((j, a, see_through)) = best else { return 0 };
-        let covariance = loop_covariance(&a, c.loop_floor_m, c.loop_floor_rad);
-        let edge =
-            self.graph.add_edge(j, current, a.candidate_from_current, covariance, EdgeKind::Loop);
-        let mut r = record(current, j, &a, see_through, LoopOutcome::Accepted);
-        r.edge = Some(edge);
-        self.loops.push(r);
-        1
+        // The correction the loop asks of the graph, in the current
+        // keyframe's frame.
+        let predicted = self.graph.nodes[j].between(&here);
+        let correction = predicted.between(&a.candidate_from_current);
+        self.loops.push(record(current, j, &a, see_through, LoopOutcome::Unconfirmed));
+        let index = self.loops.len() - 1;
+        // Confirmation: a loop stands once a second one, from another of
+        // the last keyframes, asks for the same correction in its own
+        // keyframe's frame. A false loop from aliasing (a repeated door, a
+        // symmetric junction) rarely repeats; a correction with a large
+        // rotation differs from keyframe to keyframe by the rotation times
+        // the distance between them, and waits for a closer pair.
+        self.pending.retain(|p| current - p.keyframe <= c.confirm_keyframes);
+        let agrees = |p: &PendingLoop| {
+            let d = p.correction.between(&correction);
+            d.x.hypot(d.y) <= c.confirm_distance_m
+                && wrap_angle(d.heading).abs() <= c.confirm_rotation_rad
+        };
+        let confirmed: Vec<usize> =
+            self.pending.iter().filter(|p| agrees(p)).map(|p| p.record).collect();
+        if c.confirm_keyframes > 0 && confirmed.is_empty() {
+            self.pending.push(PendingLoop { keyframe: current, correction, record: index });
+            return 0;
+        }
+        let mut added = 0;
+        for r in confirmed.into_iter().chain(std::iter::once(index)) {
+            if self.loops[r].edge.is_some() {
+                continue;
+            }
+            let l = self.loops[r];
+            let covariance =
+                loop_covariance(l.information, l.rms_m, c.loop_floor_m, c.loop_floor_rad);
+            let edge = self.graph.add_edge(
+                l.candidate,
+                l.keyframe,
+                l.candidate_from_current,
+                covariance,
+                EdgeKind::Loop,
+            );
+            self.loops[r].edge = Some(edge);
+            self.loops[r].outcome = LoopOutcome::Accepted;
+            added += 1;
+        }
+        self.pending.push(PendingLoop { keyframe: current, correction, record: index });
+        added
     }
 
     /// Optimizes the graph, marks the loops it switched off, rebuilds the
@@ -595,6 +676,8 @@ impl LoopClosing {
         };
         let report = self.graph.optimize(&self.config.optimizer);
         self.optimizations += 1;
+        // Pending loops were checked against the poses before.
+        self.pending.clear();
         self.last_optimization = Some(report.clone());
         for e in &report.switched_off {
             if let Some(r) = self.loops.iter_mut().find(|r| r.edge == Some(*e)) {
@@ -649,17 +732,34 @@ fn record(
         weakest_direction_m: a.weakest_direction_m,
         rms_m: a.rms_m,
         see_through,
+        information: a.information,
         outcome,
     }
 }
 
+/// A verified loop waiting for a second to confirm it.
+#[derive(Debug, Clone, Copy)]
+struct PendingLoop {
+    keyframe: usize,
+    /// `predicted^-1 * aligned`: what the loop would change, in its
+    /// keyframe's frame.
+    correction: Pose2,
+    /// Its index in the loop records.
+    record: usize,
+}
+
 /// A loop edge's covariance: the alignment's least-squares covariance for
 /// its residual, per endpoint of unit weight, with the floors added.
-fn loop_covariance(a: &Alignment, floor_m: f64, floor_rad: f64) -> Matrix3<f64> {
+fn loop_covariance(
+    information: Matrix3<f64>,
+    rms_m: f64,
+    floor_m: f64,
+    floor_rad: f64,
+) -> Matrix3<f64> {
     let floors =
         Matrix3::from_diagonal(&Vector3::new(floor_m.powi(2), floor_m.powi(2), floor_rad.powi(2)));
     // The information is in metres of wall; one endpoint per half metre.
-    let info = a.information * 2.0 / a.rms_m.max(0.01).powi(2);
+    let info = information * 2.0 / rms_m.max(0.01).powi(2);
     match info.try_inverse() {
         Some(c) if c.iter().all(|v| v.is_finite()) => c + floors,
         _ => floors * 100.0,
