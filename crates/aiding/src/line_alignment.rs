@@ -147,6 +147,11 @@ pub struct Alignment {
     /// Information of the estimate in `(x, y, heading)`, for an endpoint
     /// noise of `max(rms_m, noise_floor)`.
     pub information: Matrix3<f64>,
+    /// The matched length of the best hypothesis that places the current set
+    /// at least 0.5 m or 5° from this one, metres (0 if none): close to
+    /// `matched_length_m` when the structure repeats and the alignment is
+    /// ambiguous.
+    pub runner_up_length_m: f64,
 }
 
 /// One line in a form the alignment reuses: its infinite line and extent.
@@ -336,6 +341,8 @@ pub fn align_lines(
     let cand_pairs = pairs(&cand, &longest(&cand));
     let mut scratch = Vec::new();
     let mut best: Option<(f64, Pose2)> = None;
+    // Every hypothesis's score, for the runner-up distinct from the best.
+    let mut scored: Vec<(f64, Pose2)> = Vec::new();
     for &(a, b, angle, p) in &cur_pairs {
         for &(c, d, angle_k, q) in &cand_pairs {
             if (angle - angle_k).abs() > config.pair_angle_tolerance_rad {
@@ -364,6 +371,9 @@ pub fn align_lines(
                         }
                     }
                     let score = matches(&cur, &cand, &t, config, &mut scratch);
+                    if score > 0.0 {
+                        scored.push((score, t));
+                    }
                     if best.is_none_or(|(s, _)| score > s) {
                         best = Some((score, t));
                     }
@@ -375,8 +385,26 @@ pub fn align_lines(
     if score.is_nan() || score <= 0.0 {
         return None;
     }
-    refine(&cur, &cand, t, config)
+    let mut a = refine(&cur, &cand, t, config)?;
+    // The best hypothesis placing the current set at least 0.5 m or 5° away
+    // from the refined one: repeated structure (a grid of identical rooms,
+    // a row of doors) scores almost as well one period away.
+    let t = a.candidate_from_current;
+    a.runner_up_length_m = scored
+        .iter()
+        .filter(|(_, h)| {
+            (h.x - t.x).hypot(h.y - t.y) > DISTINCT_M
+                || wrap_angle(h.heading - t.heading).abs() > DISTINCT_RAD
+        })
+        .map(|(s, _)| *s)
+        .fold(0.0, f64::max);
+    Some(a)
 }
+
+/// Two hypotheses are distinct beyond this distance, metres ...
+const DISTINCT_M: f64 = 0.5;
+/// ... or this rotation, radians (5°).
+const DISTINCT_RAD: f64 = 0.0873;
 
 /// Iterated least squares from the hypothesis `t`: the matches are found
 /// again after each Gauss-Newton step.
@@ -415,6 +443,7 @@ fn refine(cur: &[Seg], cand: &[Seg], mut t: Pose2, config: &AlignmentConfig) -> 
         rms_m,
         // Unit endpoint noise; the caller scales it by its noise.
         information: h,
+        runner_up_length_m: 0.0,
     })
 }
 
@@ -529,6 +558,24 @@ mod tests {
         assert_eq!(a.matches, 8);
         assert!(a.weakest_direction_m > 5.0);
         assert!(a.rms_m < 1e-6);
+        // The room has one fit; any other places at most a wall or two.
+        assert!(a.runner_up_length_m < 0.6 * a.matched_length_m, "{a:?}");
+    }
+
+    #[test]
+    fn a_repeated_structure_has_a_close_runner_up() {
+        // A row of identical 3 m cells: one period away fits almost as well.
+        let mut row = Vec::new();
+        for k in 0..6 {
+            let x = 3.0 * k as f64;
+            row.push(seg((x, 0.0), (x + 3.0, 0.0)));
+            row.push(seg((x, 3.0), (x + 3.0, 3.0)));
+            row.push(seg((x, 0.0), (x, 2.0)));
+        }
+        let seen: Vec<_> =
+            row[3..12].iter().map(|l| l.transformed(&Pose2::new(-0.2, 0.0, 0.0))).collect();
+        let a = align_lines(&seen, &row, None, &AlignmentConfig::standard()).unwrap();
+        assert!(a.runner_up_length_m > 0.8 * a.matched_length_m, "{a:?}");
     }
 
     #[test]

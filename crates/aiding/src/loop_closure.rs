@@ -38,6 +38,10 @@ use crate::{
 /// A sample closer than this to a crossing wall is not seeing through it
 /// (the wall it lies on, seen again with noise), metres.
 const SEE_THROUGH_MARGIN_M: f64 = 0.15;
+
+/// The sequential edges' noise scale never goes below this: the estimator's
+/// own corrections against its map are not in its motion model.
+const MIN_CHAIN_SCALE: f64 = 0.25;
 use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Vector3, wrap_angle};
 use pcaline_mapping::{LineMap, MapConfig};
 
@@ -101,13 +105,17 @@ pub struct LoopClosureConfig {
     pub min_weakest_direction_m: f64,
     /// ... and an rms endpoint residual of at most this, metres ...
     pub max_rms_m: f64,
+    /// ... and no distinct alignment matching more than this fraction of
+    /// the best one's length ([`Alignment::runner_up_length_m`]: repeated
+    /// structure) ...
+    pub max_runner_up: f64,
     /// ... and neither keyframe's local lines may see through the other's
     /// walls over more than this fraction of their length
     /// ([`see_through_fraction`](crate::see_through_fraction)).
     pub max_see_through: f64,
     /// The sequential edges' covariance: the estimator's motion model over
-    /// the motion between the keyframes, times this (the estimator's own
-    /// corrections against a drifted map are not in the model).
+    /// the motion between the keyframes, at the noise scale the estimator
+    /// adapted to the source ([`StepReport::motion_noise_scale`]), times this.
     pub sequential_variance_scale: f64,
     /// Floors of a loop edge's standard deviations: position, metres ...
     pub loop_floor_m: f64,
@@ -146,6 +154,7 @@ impl LoopClosureConfig {
             min_matched_fraction: 0.4,
             min_weakest_direction_m: 1.0,
             max_rms_m: 0.04,
+            max_runner_up: 0.7,
             max_see_through: 0.5,
             sequential_variance_scale: 1.0,
             loop_floor_m: 0.05,
@@ -189,6 +198,13 @@ impl LoopClosureConfig {
             "search_sigmas",
             self.search_sigmas,
             "must be finite and >= 0",
+        )?;
+        ConfigError::check_field(
+            (0.0..=1.0).contains(&self.max_runner_up),
+            P,
+            "max_runner_up",
+            self.max_runner_up,
+            "must be in [0, 1]",
         )?;
         ConfigError::check_field(
             (0.0..=1.0).contains(&self.max_see_through),
@@ -266,6 +282,9 @@ pub enum LoopOutcome {
     LargeResidual,
     /// One keyframe's lines see through the other's walls.
     SeesThroughWalls,
+    /// Another alignment, at least 0.5 m or 5° away, matches almost as
+    /// much wall: the structure repeats.
+    Ambiguous,
     /// Verified, but no second loop from the next keyframes asked for the
     /// same correction ([`LoopClosureConfig::confirm_keyframes`]).
     Unconfirmed,
@@ -286,6 +305,9 @@ pub struct LoopRecord {
     pub matched_length_m: f64,
     /// Wall length in the weakest direction, metres.
     pub weakest_direction_m: f64,
+    /// Matched length of the best distinct alignment, metres
+    /// ([`Alignment::runner_up_length_m`]).
+    pub runner_up_length_m: f64,
     /// Rms endpoint residual, metres.
     pub rms_m: f64,
     /// The larger see-through fraction of the two directions.
@@ -470,8 +492,12 @@ impl LoopClosing {
         let (path_m, chain_heading_var, chain_position_var) = match (last, self.keyframes.last()) {
             (Some(k), Some(prev)) => {
                 let rel = k.between(&pose);
+                // The motion model at the scale the estimator has learnt
+                // for this source (`NoiseAdaptation`): a good source's chain
+                // is tight, and so is the loop search around it.
                 let cov = self.aiding.config().estimator.motion.covariance(&rel)
-                    * self.config.sequential_variance_scale;
+                    * (step.report.motion_noise_scale.max(MIN_CHAIN_SCALE)
+                        * self.config.sequential_variance_scale);
                 self.graph.add_edge(node - 1, node, rel, cov, EdgeKind::Sequential);
                 (
                     prev.path_m + rel.x.hypot(rel.y),
@@ -605,6 +631,8 @@ impl LoopClosing {
                 LoopOutcome::Unconstrained
             } else if a.rms_m > c.max_rms_m {
                 LoopOutcome::LargeResidual
+            } else if a.runner_up_length_m > c.max_runner_up * a.matched_length_m {
+                LoopOutcome::Ambiguous
             } else if see_through > c.max_see_through {
                 LoopOutcome::SeesThroughWalls
             } else {
@@ -730,6 +758,7 @@ fn record(
         candidate_from_current: a.candidate_from_current,
         matched_length_m: a.matched_length_m,
         weakest_direction_m: a.weakest_direction_m,
+        runner_up_length_m: a.runner_up_length_m,
         rms_m: a.rms_m,
         see_through,
         information: a.information,

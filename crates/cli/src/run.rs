@@ -47,8 +47,9 @@ pub struct RunArgs {
     png: bool,
 }
 
-/// The three loops compared.
-const MODES: [&str; 3] = ["unaided", "heading", "estimator"];
+/// The loops compared: three aiding modes, then the estimator with loop
+/// closure.
+const MODES: [&str; 4] = ["unaided", "heading", "estimator", "estimator + loops"];
 
 #[derive(Debug, Serialize)]
 struct ModeSummary {
@@ -85,6 +86,8 @@ struct ScanRecord {
     odometry_pose: [f64; 3],
     heading_aided_pose: [f64; 3],
     estimator_pose: [f64; 3],
+    /// The estimator with loop closure, after the last optimization.
+    loop_closure_pose: [f64; 3],
     /// Lines in the sensor frame (the schema of `pcaline detect`).
     lines: Vec<LineRecord>,
 }
@@ -121,40 +124,51 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let mut line_count = 0usize;
     let mut detect_time = 0.0;
     let mut drawn: Vec<LineSegment> = Vec::new();
-    let run = AidedRun::run(&sim, config.map, &aiding_configs, |frame, velocity| {
-        let t0 = Instant::now();
-        let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
-        detect_time += t0.elapsed().as_secs_f64();
-        let sensor_lines: Vec<SensorLine> = detection.lines.iter().map(SensorLine::from).collect();
-        line_count += sensor_lines.len();
-        residuals.extend(sensor_lines.iter().map(|l| l.line.residual_std));
-        if frame.index % 20 == 0 {
-            drawn.extend(sensor_lines.iter().map(|l| l.line.transformed(&frame.true_pose)));
-        }
-        records.push(ScanRecord {
-            index: frame.index,
-            time_s: frame.time_s,
-            true_pose: pose_array(&frame.true_pose),
-            odometry_pose: pose_array(&frame.odometry_pose),
-            // Filled in from the loops' estimates once the run is over.
-            heading_aided_pose: [f64::NAN; 3],
-            estimator_pose: [f64::NAN; 3],
-            lines: detection
-                .lines
-                .iter()
-                .map(|l| LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))))
-                .collect(),
-        });
-        bar.inc(1);
-        sensor_lines
-    })?;
+    let loop_closure = Some((config.aiding_in(AidingMode::Estimator), config.loop_closure));
+    let run = AidedRun::run_with_loop_closure(
+        &sim,
+        config.map,
+        &aiding_configs,
+        loop_closure,
+        |frame, velocity| {
+            let t0 = Instant::now();
+            let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
+            detect_time += t0.elapsed().as_secs_f64();
+            let sensor_lines: Vec<SensorLine> =
+                detection.lines.iter().map(SensorLine::from).collect();
+            line_count += sensor_lines.len();
+            residuals.extend(sensor_lines.iter().map(|l| l.line.residual_std));
+            if frame.index % 20 == 0 {
+                drawn.extend(sensor_lines.iter().map(|l| l.line.transformed(&frame.true_pose)));
+            }
+            records.push(ScanRecord {
+                index: frame.index,
+                time_s: frame.time_s,
+                true_pose: pose_array(&frame.true_pose),
+                odometry_pose: pose_array(&frame.odometry_pose),
+                // Filled in from the loops' estimates once the run is over.
+                heading_aided_pose: [f64::NAN; 3],
+                estimator_pose: [f64::NAN; 3],
+                loop_closure_pose: [f64::NAN; 3],
+                lines: detection
+                    .lines
+                    .iter()
+                    .map(|l| LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))))
+                    .collect(),
+            });
+            bar.inc(1);
+            sensor_lines
+        },
+    )?;
     bar.finish_and_clear();
     let estimates = &run.estimates;
     for (k, record) in records.iter_mut().enumerate() {
         record.heading_aided_pose = pose_array(&estimates[1][k]);
         record.estimator_pose = pose_array(&estimates[2][k]);
+        record.loop_closure_pose = pose_array(&estimates[3][k]);
     }
-    let full = &run.loops[2];
+    // The map of the default: the estimator with loop closure.
+    let full = run.loop_closing.as_ref().map_or(&run.loops[2], |l| l.aiding());
 
     let scores = run.scores(sim.true_poses()).context("the scene has no scans")?;
     let modes: Vec<ModeSummary> = MODES

@@ -4,7 +4,7 @@
 //! each scored by its trajectory errors and its map's quality.
 
 use crate::{MapQuality, TrajectoryErrors, VisibleWalls, map_quality, trajectory_errors};
-use pcaline_aiding::{Aiding, AidingConfig, SensorLine};
+use pcaline_aiding::{Aiding, AidingConfig, LoopClosing, LoopClosureConfig, SensorLine};
 use pcaline_geometry::{ConfigError, Pose2};
 use pcaline_mapping::MapConfig;
 use pcaline_sim::{SimFrame, Simulator};
@@ -19,7 +19,10 @@ pub const MAP_MAX_ANGLE_DEG: f64 = 2.0;
 pub struct AidedRun {
     /// The loops, in the order of the configurations given.
     pub loops: Vec<Aiding>,
-    /// Each loop's pose after every scan.
+    /// The loop with loop closure, if asked for
+    /// ([`AidedRun::run_with_loop_closure`]).
+    pub loop_closing: Option<LoopClosing>,
+    /// Each loop's pose after every scan (the loop closure's last).
     pub estimates: Vec<Vec<Pose2>>,
     /// The wall length the sensor saw (5 cm bins).
     pub visible: VisibleWalls,
@@ -44,10 +47,26 @@ impl AidedRun {
         sim: &Simulator,
         map: MapConfig,
         modes: &[AidingConfig],
+        lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
+    ) -> Result<Self, ConfigError> {
+        Self::run_with_loop_closure(sim, map, modes, None, lines_of)
+    }
+
+    /// As [`AidedRun::run`], with one more loop when `loop_closure` is given:
+    /// that aiding with loop closure on top ([`LoopClosing`]). Its estimate,
+    /// the trajectory of the graph after a last optimization, comes after
+    /// the others in [`AidedRun::estimates`], and its score after theirs.
+    pub fn run_with_loop_closure(
+        sim: &Simulator,
+        map: MapConfig,
+        modes: &[AidingConfig],
+        loop_closure: Option<(AidingConfig, LoopClosureConfig)>,
         mut lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
     ) -> Result<Self, ConfigError> {
         let mut loops =
             modes.iter().map(|a| Aiding::new(*a, map)).collect::<Result<Vec<_>, _>>()?;
+        let mut loop_closing =
+            loop_closure.map(|(a, l)| LoopClosing::new(a, map, l)).transpose()?;
         let mut estimates: Vec<Vec<Pose2>> = modes.iter().map(|_| Vec::new()).collect();
         let mut visible = VisibleWalls::new(sim.world().walls(), 0.05);
         let mut last: Option<(f64, Pose2)> = None;
@@ -59,9 +78,16 @@ impl AidedRun {
             for (aiding, out) in loops.iter_mut().zip(estimates.iter_mut()) {
                 out.push(aiding.step_at(frame.time_s, &frame.odometry_pose, &lines).0);
             }
+            if let Some(l) = loop_closing.as_mut() {
+                l.step_at(frame.time_s, &frame.odometry_pose, &lines);
+            }
             visible.observe(&frame);
         }
-        Ok(AidedRun { loops, estimates, visible })
+        if let Some(l) = loop_closing.as_mut() {
+            l.optimize();
+            estimates.push(l.trajectory().into_iter().map(Option::unwrap_or_default).collect());
+        }
+        Ok(AidedRun { loops, loop_closing, estimates, visible })
     }
 
     /// Each loop's errors against `truth` (the run's true poses) and its map's
@@ -69,12 +95,14 @@ impl AidedRun {
     pub fn scores(&self, truth: &[Pose2]) -> Option<Vec<AidedScore>> {
         self.loops
             .iter()
+            .map(Aiding::map)
+            .chain(self.loop_closing.as_ref().map(LoopClosing::map))
             .zip(&self.estimates)
-            .map(|(aiding, est)| {
+            .map(|(map, est)| {
                 Some(AidedScore {
                     errors: trajectory_errors(est, truth)?,
                     map: map_quality(
-                        aiding.map().lines(),
+                        map.lines(),
                         &self.visible,
                         MAP_TOLERANCE_M,
                         MAP_MAX_ANGLE_DEG.to_radians(),
