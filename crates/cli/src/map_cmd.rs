@@ -237,29 +237,7 @@ fn finish(runner: &mut Runner, poses: &mut [PoseOut]) -> Option<GraphOut> {
                 },
                 active: e.active,
                 from_from_to: [e.from_from_to.x, e.from_from_to.y, e.from_from_to.heading],
-                covariance: [
-                    e.covariance
-                        .row(0)
-                        .iter()
-                        .copied()
-                        .collect::<Vec<_>>()
-                        .try_into()
-                        .unwrap_or_default(),
-                    e.covariance
-                        .row(1)
-                        .iter()
-                        .copied()
-                        .collect::<Vec<_>>()
-                        .try_into()
-                        .unwrap_or_default(),
-                    e.covariance
-                        .row(2)
-                        .iter()
-                        .copied()
-                        .collect::<Vec<_>>()
-                        .try_into()
-                        .unwrap_or_default(),
-                ],
+                covariance: std::array::from_fn(|r| std::array::from_fn(|c| e.covariance[(r, c)])),
             })
             .collect(),
         loops: l

@@ -168,6 +168,22 @@ fn map_and_draw_on_real_data() {
         let traj: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.join("trajectory.json")).unwrap()).unwrap();
         assert_eq!(traj.as_array().unwrap().len(), 910);
+        // Loop closure is on by default: the graph is written, with its
+        // keyframes, sequential and loop edges, and the loops it accepted.
+        let graph: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("graph.json")).unwrap()).unwrap();
+        let nodes = graph["nodes"].as_array().unwrap().len();
+        let edges = graph["edges"].as_array().unwrap();
+        assert!(nodes > 100, "{nodes} keyframes");
+        assert!(edges.iter().filter(|e| e["kind"] == "sequential").count() == nodes - 1);
+        let loops = edges.iter().filter(|e| e["kind"] == "loop").count();
+        assert!(loops > 0, "no loop edge");
+        assert!(graph["loops"].as_array().unwrap().iter().any(|l| l["outcome"] == "accepted"));
+        assert!(std::fs::read_to_string(dir.join("map.svg")).unwrap().contains("loop closure"));
+        let off = tmp("intel-map-no-loops");
+        let out = pcaline(&["--quiet", "map", s(&path), "--no-loop-closure", "--out", s(&off)]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(off.join("trajectory.json").exists() && !off.join("graph.json").exists());
     }
     if let Some(path) = data("utm30lx-ros2") {
         let svg = tmp("scan.svg");
