@@ -2,7 +2,9 @@
 //! in, corrected pose and updated line map out.
 
 use crate::{Config, LineDetector};
-use pcaline_aiding::{Aiding, AidingConfig, SensorLine, StepReport};
+use pcaline_aiding::{
+    AidingConfig, Localizer, LoopClosing, LoopClosureConfig, OptimizeReport, SensorLine, StepReport,
+};
 use pcaline_geometry::{ConfigError, Pose2, Scan};
 use pcaline_mapping::{LineMap, MapConfig};
 
@@ -15,6 +17,8 @@ pub struct MapperConfig {
     pub map: MapConfig,
     /// The aiding.
     pub aiding: AidingConfig,
+    /// Loop closure on top of the aiding (`None`: off).
+    pub loop_closure: Option<LoopClosureConfig>,
 }
 
 impl MapperConfig {
@@ -25,18 +29,20 @@ impl MapperConfig {
             detector: Config::paper(),
             map: MapConfig::paper(),
             aiding: AidingConfig::paper(),
+            loop_closure: None,
         }
     }
 }
 
 impl Default for MapperConfig {
-    /// The default detector, a refining map with the line lifecycle, and
-    /// the estimator.
+    /// The default detector, a refining map with the line lifecycle, the
+    /// estimator, and loop closure (as `pcaline map`).
     fn default() -> Self {
         MapperConfig {
             detector: Config::default(),
             map: MapConfig::default(),
             aiding: AidingConfig::estimator(),
+            loop_closure: Some(LoopClosureConfig::standard()),
         }
     }
 }
@@ -69,7 +75,7 @@ pub struct MapperStep {
 #[derive(Debug, Clone)]
 pub struct Mapper {
     detector: LineDetector,
-    aiding: Aiding,
+    localizer: Localizer,
     lines: Vec<SensorLine>,
     /// The last stamped source pose (for the deskew velocity).
     last_source: Option<(f64, Pose2)>,
@@ -80,7 +86,7 @@ impl Mapper {
     pub fn new(config: MapperConfig) -> Result<Self, ConfigError> {
         Ok(Mapper {
             detector: LineDetector::new(config.detector)?,
-            aiding: Aiding::new(config.aiding, config.map)?,
+            localizer: Localizer::new(config.aiding, config.map, config.loop_closure)?,
             lines: Vec::new(),
             last_source: None,
         })
@@ -97,10 +103,7 @@ impl Mapper {
         };
         self.last_source = scan.stamp_s.map(|t| (t, *source_pose));
         self.detect(scan, velocity);
-        let (pose, report) = match scan.stamp_s {
-            Some(t) => self.aiding.step_at(t, source_pose, &self.lines),
-            None => self.aiding.step(source_pose, &self.lines),
-        };
+        let (pose, report) = self.localizer.step_with(scan.stamp_s, source_pose, &self.lines);
         MapperStep { pose, lines: self.lines.len(), report }
     }
 
@@ -108,15 +111,8 @@ impl Mapper {
     /// the last estimated motion is the prediction, the line matches
     /// estimate the motion.
     pub fn process_without_source(&mut self, scan: &Scan) -> MapperStep {
-        self.detect(scan, self.aiding.velocity());
-        let (pose, report) = self.aiding.step_without_source(scan.stamp_s, &self.lines);
-        MapperStep { pose, lines: self.lines.len(), report }
-    }
-
-    /// Processes one scan with the source's motion since the previous scan.
-    pub fn process_increment(&mut self, scan: &Scan, increment: &Pose2) -> MapperStep {
-        self.detect(scan, self.aiding.velocity());
-        let (pose, report) = self.aiding.step_increment(increment, &self.lines);
+        self.detect(scan, self.localizer.velocity());
+        let (pose, report) = self.localizer.step_without_source(scan.stamp_s, &self.lines);
         MapperStep { pose, lines: self.lines.len(), report }
     }
 
@@ -128,13 +124,32 @@ impl Mapper {
         self.lines.extend(detection.lines.iter().map(SensorLine::from));
     }
 
-    /// The map built so far.
+    /// The map built so far (rebuilt from the keyframes after each loop
+    /// closure).
     pub fn map(&self) -> &LineMap {
-        self.aiding.map()
+        self.localizer.map()
     }
 
     /// The latest corrected pose.
     pub fn pose(&self) -> Option<Pose2> {
-        self.aiding.pose()
+        self.localizer.pose()
+    }
+
+    /// The loop closure (its graph, keyframes and loops), when on.
+    pub fn loop_closing(&self) -> Option<&LoopClosing> {
+        self.localizer.loop_closing()
+    }
+
+    /// Optimizes the pose graph now (when loop closure is on); afterwards
+    /// [`Mapper::trajectory`] gives the optimized trajectory.
+    pub fn optimize(&mut self) -> Option<OptimizeReport> {
+        self.localizer.optimize()
+    }
+
+    /// Every processed scan's pose as the pose graph now places it (loop
+    /// closure on), `None` without loop closure: then the poses the steps
+    /// returned are final.
+    pub fn trajectory(&self) -> Option<Vec<Option<Pose2>>> {
+        self.loop_closing().map(LoopClosing::trajectory)
     }
 }

@@ -32,6 +32,7 @@ mod aiding;
 mod heading;
 mod line_alignment;
 mod line_measurement;
+mod localizer;
 mod loop_closure;
 mod motion_noise;
 mod pose_graph;
@@ -47,6 +48,7 @@ pub use line_alignment::{
     Alignment, AlignmentConfig, AlignmentPrior, align_lines, see_through_fraction,
 };
 pub use line_measurement::{LineMeasurement, MeasurementNoise, measure};
+pub use localizer::Localizer;
 pub use loop_closure::{
     Keyframe, LoopClosing, LoopClosureConfig, LoopOutcome, LoopRecord, LoopStep, OptimizeSchedule,
 };

@@ -6,9 +6,8 @@
 //! of the UTM-30LX-EW bag.
 
 use crate::config_file::NamedConfig;
-use crate::runner::Runner;
 use anyhow::{Context, Result};
-use pcaline::aiding::{Aiding, AidingConfig, AidingMode, LoopClosureConfig, SensorLine};
+use pcaline::aiding::{Aiding, AidingConfig, AidingMode, Localizer, LoopClosureConfig, SensorLine};
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
     RelationErrors, StampedTrajectory, aligned_trajectory_errors, relation_errors,
@@ -54,8 +53,11 @@ fn modes(config: &NamedConfig) -> [(&'static str, AidingConfig, Option<LoopClosu
 }
 
 /// One loop per mode.
-fn runners(config: &NamedConfig) -> Result<Vec<Runner>> {
-    modes(config).iter().map(|(_, a, l)| Runner::new(*a, config.map, *l)).collect()
+fn runners(config: &NamedConfig) -> Result<Vec<Localizer>> {
+    Ok(modes(config)
+        .iter()
+        .map(|(_, a, l)| Localizer::new(*a, config.map, *l))
+        .collect::<Result<_, _>>()?)
 }
 
 /// One trajectory against a reference: absolute errors after aligning at the
@@ -181,7 +183,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
 /// One detector and one aiding loop per mode, fed scan by scan.
 struct Loops {
     detector: LineDetector,
-    loops: Vec<Runner>,
+    loops: Vec<Localizer>,
     lines: Vec<SensorLine>,
 }
 
@@ -199,7 +201,7 @@ impl Loops {
         self.lines.clear();
         self.lines.extend(self.detector.detect(scan).lines.iter().map(SensorLine::from));
         let lines = &self.lines;
-        self.loops.iter_mut().map(|a| a.step(scan.stamp_s, source, lines).0).collect()
+        self.loops.iter_mut().map(|a| a.step_with(scan.stamp_s, source, lines).0).collect()
     }
 
     /// Replaces the poses of the loop-closing modes by their optimized
@@ -353,7 +355,7 @@ fn intel_run(
             (Some(lines), _) => {
                 let poses: Vec<Pose2> = loops
                     .iter_mut()
-                    .map(|a| a.step(Some(record.time_s), source, lines).0)
+                    .map(|a| a.step_with(Some(record.time_s), source, lines).0)
                     .collect();
                 at_last_scan = Some((*source, poses.clone()));
                 since_scan.push(Some((scans, Pose2::default())));

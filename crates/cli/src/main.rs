@@ -20,7 +20,6 @@ mod picture;
 mod progress;
 mod reproduce;
 mod run;
-mod runner;
 mod scene_cmd;
 mod svg;
 

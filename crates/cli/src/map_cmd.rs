@@ -5,12 +5,11 @@ use crate::exit::BadInput;
 use crate::log_args::LogArgs;
 use crate::picture::write_svg_and_png;
 use crate::progress;
-use crate::runner::Runner;
 use crate::svg::Plot;
 use anyhow::Result;
 use clap::ValueEnum;
 use pcaline::LineDetector;
-use pcaline::aiding::{AidingMode, EdgeKind, LoopOutcome, SensorLine};
+use pcaline::aiding::{AidingMode, EdgeKind, Localizer, LoopOutcome, SensorLine};
 use pcaline_io::{LogRecord, read_log, write_json, write_map_csv, write_map_json};
 use serde::Serialize;
 use std::ops::ControlFlow;
@@ -99,7 +98,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     })?;
     let mut detector = LineDetector::new(config.detector)?;
     let loops = (!args.no_loop_closure).then_some(config.loop_closure);
-    let mut aiding = Runner::new(aiding_config, config.map, loops)?;
+    let mut aiding = Localizer::new(aiding_config, config.map, loops)?;
     let bar = progress::spinner("scans", quiet);
     let mut poses: Vec<PoseOut> = Vec::new();
     let mut lines: Vec<SensorLine> = Vec::new();
@@ -123,7 +122,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             detector.detect_moving(&s.scan, velocity.as_ref()).lines.iter().map(SensorLine::from),
         );
         let (pose, report) = match (source, s.scan.stamp_s) {
-            (Some(p), stamp) => aiding.step(stamp, &p, &lines),
+            (Some(p), stamp) => aiding.step_with(stamp, &p, &lines),
             (None, stamp) => {
                 // No motion source: LIDAR-only mode, the last estimated
                 // motion repeated as the prediction, the lines estimating it.
@@ -209,7 +208,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
 
 /// With loop closure: a last optimization, the trajectory replaced by the
 /// optimized one, and the graph to write.
-fn finish(runner: &mut Runner, poses: &mut [PoseOut]) -> Option<GraphOut> {
+fn finish(runner: &mut Localizer, poses: &mut [PoseOut]) -> Option<GraphOut> {
     let trajectory = runner.finish()?;
     let l = runner.loop_closing()?;
     for (out, p) in poses.iter_mut().zip(trajectory) {

@@ -1,47 +1,47 @@
-//! [`Runner`]: the estimator alone or with loop closure, behind one set of
-//! steps, for the commands that offer both (`map`, `eval --real`).
+//! [`Localizer`]: the aiding alone or with loop closure on top, behind one
+//! set of steps, for callers that offer both (the facade's `Mapper`,
+//! `pcaline map`, `pcaline eval --real`).
 
-use anyhow::Result;
-use pcaline::Pose2;
-use pcaline::aiding::{
-    Aiding, AidingConfig, LoopClosing, LoopClosureConfig, SensorLine, StepReport,
-};
-use pcaline::mapping::{LineMap, MapConfig};
+use crate::{Aiding, AidingConfig, LoopClosing, LoopClosureConfig, SensorLine, StepReport};
+use pcaline_geometry::{ConfigError, Pose2};
+use pcaline_mapping::{LineMap, MapConfig};
 
-/// One aiding loop: the aiding alone, or with loop closure on top.
-pub enum Runner {
+/// One localization loop: the aiding alone, or with loop closure on top.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub enum Localizer {
     /// The aiding alone.
     Plain(Box<Aiding>),
     /// Keyframes, loop closure and a pose graph on top of the aiding.
     Loops(Box<LoopClosing>),
 }
 
-impl Runner {
+impl Localizer {
     /// A loop with an empty map; with loop closure when `loops` is given.
     pub fn new(
         aiding: AidingConfig,
         map: MapConfig,
         loops: Option<LoopClosureConfig>,
-    ) -> Result<Self> {
+    ) -> Result<Self, ConfigError> {
         Ok(match loops {
-            None => Runner::Plain(Box::new(Aiding::new(aiding, map)?)),
-            Some(l) => Runner::Loops(Box::new(LoopClosing::new(aiding, map, l)?)),
+            None => Localizer::Plain(Box::new(Aiding::new(aiding, map)?)),
+            Some(l) => Localizer::Loops(Box::new(LoopClosing::new(aiding, map, l)?)),
         })
     }
 
     /// The aiding (the estimator under the loop closure).
     pub fn aiding(&self) -> &Aiding {
         match self {
-            Runner::Plain(a) => a,
-            Runner::Loops(l) => l.aiding(),
+            Localizer::Plain(a) => a,
+            Localizer::Loops(l) => l.aiding(),
         }
     }
 
     /// The loop closure, if on.
     pub fn loop_closing(&self) -> Option<&LoopClosing> {
         match self {
-            Runner::Plain(_) => None,
-            Runner::Loops(l) => Some(l),
+            Localizer::Plain(_) => None,
+            Localizer::Loops(l) => Some(l),
         }
     }
 
@@ -55,21 +55,35 @@ impl Runner {
         self.aiding().velocity()
     }
 
-    /// One scan with the source's pose, stamped or not.
-    pub fn step(
+    /// The latest corrected pose.
+    pub fn pose(&self) -> Option<Pose2> {
+        self.aiding().pose()
+    }
+
+    /// Optimizes the graph now (with loop closure; `None` without).
+    pub fn optimize(&mut self) -> Option<crate::OptimizeReport> {
+        match self {
+            Localizer::Plain(_) => None,
+            Localizer::Loops(l) => Some(l.optimize()),
+        }
+    }
+
+    /// One scan with the source's pose: [`Aiding::step_at`] when stamped,
+    /// [`Aiding::step`] when not (with loop closure on top, if on).
+    pub fn step_with(
         &mut self,
         stamp_s: Option<f64>,
         source: &Pose2,
         lines: &[SensorLine],
     ) -> (Pose2, StepReport) {
         match (self, stamp_s) {
-            (Runner::Plain(a), Some(t)) => a.step_at(t, source, lines),
-            (Runner::Plain(a), None) => a.step(source, lines),
-            (Runner::Loops(l), Some(t)) => {
+            (Localizer::Plain(a), Some(t)) => a.step_at(t, source, lines),
+            (Localizer::Plain(a), None) => a.step(source, lines),
+            (Localizer::Loops(l), Some(t)) => {
                 let s = l.step_at(t, source, lines);
                 (s.pose, s.report)
             }
-            (Runner::Loops(l), None) => {
+            (Localizer::Loops(l), None) => {
                 let s = l.step(source, lines);
                 (s.pose, s.report)
             }
@@ -83,8 +97,8 @@ impl Runner {
         lines: &[SensorLine],
     ) -> (Pose2, StepReport) {
         match self {
-            Runner::Plain(a) => a.step_without_source(stamp_s, lines),
-            Runner::Loops(l) => {
+            Localizer::Plain(a) => a.step_without_source(stamp_s, lines),
+            Localizer::Loops(l) => {
                 let s = l.step_without_source(stamp_s, lines);
                 (s.pose, s.report)
             }
@@ -97,8 +111,8 @@ impl Runner {
     /// come.
     pub fn finish(&mut self) -> Option<Vec<Option<Pose2>>> {
         match self {
-            Runner::Plain(_) => None,
-            Runner::Loops(l) => {
+            Localizer::Plain(_) => None,
+            Localizer::Loops(l) => {
                 l.optimize();
                 Some(l.trajectory())
             }
