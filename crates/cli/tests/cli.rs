@@ -60,7 +60,8 @@ fn run_on_a_small_generated_scene_writes_every_output() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(summary["scans"].as_u64().unwrap() > 10);
-    assert_eq!(summary["modes"].as_array().unwrap().len(), 3);
+    assert_eq!(summary["modes"].as_array().unwrap().len(), 4);
+    assert_eq!(summary["modes"][3]["mode"], "estimator + loops");
     for f in
         ["scans.json", "map.json", "detections.svg", "map.svg", "heading.svg", "heading-error.svg"]
     {
