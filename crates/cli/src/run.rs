@@ -349,7 +349,7 @@ fn print_summary(s: &Summary) {
     println!("detection time       {:.1} us per scan", s.detection_time_per_scan_us);
     println!();
     println!(
-        "{:<10} {:>12} {:>12} {:>12} {:>12} {:>9} {:>11} {:>9} {:>9}",
+        "{:<17} {:>12} {:>12} {:>12} {:>12} {:>9} {:>11} {:>9} {:>9}",
         "aiding",
         "heading rms",
         "heading max",
@@ -362,7 +362,7 @@ fn print_summary(s: &Summary) {
     );
     for m in &s.modes {
         println!(
-            "{:<10} {:>10.3} ° {:>10.3} ° {:>10.3} m {:>10.3} m {:>9} {:>8.1} cm {:>9} {:>8.1}%",
+            "{:<17} {:>10.3} ° {:>10.3} ° {:>10.3} m {:>10.3} m {:>9} {:>8.1} cm {:>9} {:>8.1}%",
             m.mode,
             m.heading_rms_deg,
             m.heading_max_deg,
