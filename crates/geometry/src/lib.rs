@@ -27,6 +27,7 @@ mod noise;
 mod pose;
 mod relation;
 mod scan;
+mod sensor_profile;
 
 pub use angle::{line_angle_diff, wrap_angle};
 pub use bearings::{BearingTable, ScanPoints, polar_to_cartesian};
@@ -37,3 +38,4 @@ pub use noise::RangeNoise;
 pub use pose::Pose2;
 pub use relation::Relation;
 pub use scan::Scan;
+pub use sensor_profile::SensorProfile;

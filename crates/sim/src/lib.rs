@@ -25,6 +25,7 @@ mod rng;
 mod scene;
 mod sensor;
 mod simulate;
+mod surfaces;
 mod trajectory;
 mod world;
 
@@ -36,5 +37,6 @@ pub use scene::{
 };
 pub use sensor::{Faults, SensorModel, Tilt};
 pub use simulate::{BeamTruth, Fault, SimFrame, Simulator, WallRun};
+pub use surfaces::collinear_surfaces;
 pub use trajectory::Trajectory;
 pub use world::{Hit, Wall, World};

@@ -55,6 +55,10 @@ pub struct SensorSpec {
     pub model: SensorKind,
     /// Replaces the model's range noise with a constant sigma, metres.
     pub range_sigma_m: Option<f64>,
+    /// Rounds every range to a multiple of this step, metres, instead of
+    /// the model's resolution ([`SensorModel::range_resolution_m`]); 0: no
+    /// rounding.
+    pub range_resolution_m: Option<f64>,
     /// Outlier probability per beam.
     pub outlier_probability: f64,
     /// Dropout probability per beam.
@@ -72,6 +76,7 @@ impl Default for SensorSpec {
         SensorSpec {
             model: SensorKind::Utm30lxEw,
             range_sigma_m: None,
+            range_resolution_m: None,
             outlier_probability: 0.0,
             dropout_probability: 0.0,
             mixed_pixel_probability: 0.0,
@@ -90,6 +95,12 @@ pub enum SensorKind {
     /// [`SensorModel::sick_lms_180`].
     #[serde(rename = "sick-lms-180")]
     SickLms180,
+    /// [`SensorModel::urg_04lx`].
+    #[serde(rename = "urg-04lx")]
+    Urg04lx,
+    /// [`SensorModel::rplidar`].
+    #[serde(rename = "rplidar")]
+    Rplidar,
 }
 
 /// Sway of the scan plane, in degrees.
@@ -306,9 +317,14 @@ impl Scene {
         let mut m = match s.model {
             SensorKind::Utm30lxEw => SensorModel::utm30lx_ew(),
             SensorKind::SickLms180 => SensorModel::sick_lms_180(),
+            SensorKind::Urg04lx => SensorModel::urg_04lx(),
+            SensorKind::Rplidar => SensorModel::rplidar(),
         };
         if let Some(sigma) = s.range_sigma_m {
             m.noise = RangeNoise::constant(sigma);
+        }
+        if let Some(step) = s.range_resolution_m {
+            m.range_resolution_m = step;
         }
         m.faults.outlier_probability = s.outlier_probability;
         m.faults.dropout_probability = s.dropout_probability;

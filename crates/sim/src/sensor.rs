@@ -1,6 +1,6 @@
 //! [`SensorModel`]: the simulated LIDAR's geometry, timing, noise and faults.
 
-use pcaline_geometry::{ConfigError, RangeNoise};
+use pcaline_geometry::{ConfigError, RangeNoise, SensorProfile};
 use std::f64::consts::PI;
 
 /// Fault probabilities, per beam.
@@ -51,6 +51,10 @@ pub struct SensorModel {
     pub rate_hz: f64,
     /// Range noise (Gaussian).
     pub noise: RangeNoise,
+    /// Range resolution, metres: every published range is rounded to a
+    /// multiple of it after the noise, as sensors that report centimetres
+    /// (or 5 cm steps) do. 0: ranges are not rounded.
+    pub range_resolution_m: f64,
     /// Fault probabilities.
     pub faults: Faults,
     /// Each beam is taken at its own time within the scan (the mirror turns
@@ -72,6 +76,7 @@ impl SensorModel {
             range_max_m: 30.0,
             rate_hz: 40.0,
             noise: RangeNoise::utm30lx(),
+            range_resolution_m: 0.0,
             faults: Faults { outlier_max_m: 1.0, mixed_edge_m: 0.3, ..Faults::default() },
             motion_skew: false,
             tilt: None,
@@ -89,6 +94,40 @@ impl SensorModel {
             range_max_m: 80.0,
             rate_hz: 75.0,
             noise: RangeNoise::constant(0.01),
+            ..Self::utm30lx_ew()
+        }
+    }
+
+    /// A Hokuyo URG-04LX: 683 beams of 360°/1024 from -120°, 0.02-5.6 m,
+    /// 10 Hz, the datasheet's noise ([`SensorProfile::Urg04lx`]: 10 mm below
+    /// 1 m, 30 mm beyond), ranges in millimetres.
+    pub fn urg_04lx() -> Self {
+        SensorModel {
+            beams: 683,
+            angle_min_rad: -120.0 * PI / 180.0,
+            angle_increment_rad: 2.0 * PI / 1024.0,
+            range_min_m: 0.02,
+            range_max_m: 5.6,
+            rate_hz: 10.0,
+            noise: SensorProfile::Urg04lx.range_noise(),
+            range_resolution_m: SensorProfile::Urg04lx.range_resolution_m(),
+            ..Self::utm30lx_ew()
+        }
+    }
+
+    /// A low-cost 360° scanner (RPLIDAR A2 class): 400 beams of 0.9° all
+    /// round from -180°, 0.15-12 m, 10 Hz, the class's noise
+    /// ([`SensorProfile::Rplidar`]: 20 mm below 3 m, 50 mm beyond).
+    pub fn rplidar() -> Self {
+        SensorModel {
+            beams: 400,
+            angle_min_rad: -PI,
+            angle_increment_rad: 2.0 * PI / 400.0,
+            range_min_m: 0.15,
+            range_max_m: 12.0,
+            rate_hz: 10.0,
+            noise: SensorProfile::Rplidar.range_noise(),
+            range_resolution_m: SensorProfile::Rplidar.range_resolution_m(),
             ..Self::utm30lx_ew()
         }
     }
@@ -137,6 +176,12 @@ impl SensorModel {
             "must be finite and > 0",
         )?;
         self.noise.validate("sensor.noise")?;
+        ConfigError::check(
+            self.range_resolution_m >= 0.0 && self.range_resolution_m <= 1.0,
+            "sensor.range_resolution_m",
+            self.range_resolution_m,
+            "must be in [0, 1]",
+        )?;
         for (field, p) in [
             ("sensor.outlier_probability", self.faults.outlier_probability),
             ("sensor.dropout_probability", self.faults.dropout_probability),

@@ -69,12 +69,24 @@ impl SimFrame {
     /// returns are valid in the published scan (noise and faults included) and
     /// whose ground truth names the same wall.
     pub fn wall_runs(&self, min_beams: usize) -> Vec<WallRun> {
+        self.runs_by(min_beams, |w| w)
+    }
+
+    /// As [`SimFrame::wall_runs`], with walls of one surface (`surfaces`,
+    /// from [`crate::World::surfaces`]) counted as one: a straight wall drawn
+    /// as several segments gives one run, whose `wall` is the surface id.
+    pub fn surface_runs(&self, min_beams: usize, surfaces: &[u32]) -> Vec<WallRun> {
+        self.runs_by(min_beams, |w| surfaces.get(w as usize).copied().unwrap_or(w))
+    }
+
+    fn runs_by(&self, min_beams: usize, id: impl Fn(u32) -> u32) -> Vec<WallRun> {
         let mut runs = Vec::new();
         let mut current: Option<WallRun> = None;
         for (i, beam) in self.beams.iter().enumerate() {
             let wall = beam.wall.filter(|_| {
                 beam.fault == Fault::None && self.scan.is_valid_range(self.scan.ranges[i])
             });
+            let wall = wall.map(&id);
             match (current.as_mut(), wall) {
                 (Some(run), Some(w)) if run.wall == w && run.last_beam + 1 == i => {
                     run.last_beam = i
@@ -304,7 +316,11 @@ impl Simulator {
             }
             let sigma = s.noise.sigma_at(measured);
             let z: f64 = StandardNormal.sample(&mut rng);
-            ranges.push((measured + sigma * z) as f32);
+            let mut published = measured + sigma * z;
+            if s.range_resolution_m > 0.0 {
+                published = (published / s.range_resolution_m).round() * s.range_resolution_m;
+            }
+            ranges.push(published as f32);
         }
         ranges
     }

@@ -33,6 +33,7 @@ pub struct Hit {
 #[derive(Debug, Clone)]
 pub struct World {
     walls: Vec<Wall>,
+    surfaces: Vec<u32>,
     bvh: Bvh,
 }
 
@@ -50,12 +51,19 @@ impl World {
             })
             .collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves);
-        World { walls, bvh }
+        let surfaces = crate::collinear_surfaces(&walls);
+        World { walls, surfaces, bvh }
     }
 
     /// The walls.
     pub fn walls(&self) -> &[Wall] {
         &self.walls
+    }
+
+    /// The surface of each wall ([`crate::collinear_surfaces`]): walls drawn
+    /// end to end along one line share the smallest of their indices.
+    pub fn surfaces(&self) -> &[u32] {
+        &self.surfaces
     }
 
     /// The nearest wall hit by the ray from `origin` along the unit vector

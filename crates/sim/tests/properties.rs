@@ -161,3 +161,29 @@ fn wall_runs_follow_valid_consecutive_beams() {
     }
     let _ = Point2::<f64>::origin();
 }
+
+/// A sensor with a range resolution publishes multiples of it, within half a
+/// step of the unrounded range.
+#[test]
+fn ranges_are_rounded_to_the_resolution() {
+    let mut scene = maze(7, WallStyle::Single);
+    scene.sensor.range_resolution_m = Some(0.05);
+    let rounded = Simulator::new(&scene, 3).unwrap();
+    scene.sensor.range_resolution_m = Some(0.0);
+    let exact = Simulator::new(&scene, 3).unwrap();
+    let (a, b) = (rounded.frame(5).unwrap(), exact.frame(5).unwrap());
+    let mut finite = 0;
+    for (&r, &e) in a.scan.ranges.iter().zip(&b.scan.ranges) {
+        if r.is_finite() {
+            finite += 1;
+            let steps = f64::from(r) / 0.05;
+            assert!((steps - steps.round()).abs() < 1e-4, "{r} is not a multiple of 5 cm");
+            assert!((r - e).abs() <= 0.025 + 1e-5, "{r} rounded from {e}");
+        }
+    }
+    assert!(finite > 100);
+    let mut bad = scene.clone();
+    bad.sensor.range_resolution_m = Some(-0.01);
+    let e = bad.validate().unwrap_err().to_string();
+    assert!(e.contains("range_resolution_m"), "{e}");
+}
