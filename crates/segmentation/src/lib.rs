@@ -32,7 +32,10 @@ mod split;
 
 pub use level1::{continues_line, is_break, level1_clusters, seam_start};
 pub use level2::{DerivativeSign, derivative_peak_split};
-pub use noise_estimate::{NoiseEstimation, NoiseScratch, estimate_range_noise};
+pub use noise_estimate::{
+    NoiseEstimate, NoiseEstimation, NoiseScratch, RangeGrid, detect_range_step,
+    estimate_range_noise,
+};
 pub use split::split_at_farthest;
 
 use pcaline_geometry::{ConfigError, RangeNoise};
