@@ -20,6 +20,31 @@ fn scan_of(text: &str, name: &str) -> Scan {
     sim.frame(sim.len() / 3).unwrap().scan
 }
 
+/// The office scene's scan at range noise `sigma_m` (constant).
+fn office_at(sigma_m: f64) -> Scan {
+    let text = include_str!("../sim-scenes/office-clutter.toml");
+    let mut scene = pcaline_io::parse_scene(std::path::Path::new("office.toml"), text).unwrap();
+    scene.sensor.range_sigma_m = Some(sigma_m);
+    let sim = Simulator::new(&scene, 1).unwrap();
+    sim.frame(sim.len() / 3).unwrap().scan
+}
+
+/// Detection time against range noise: the same scan at 10 mm and 30 mm,
+/// for the default (told the datasheet) and the adaptive detector.
+fn detection_by_noise(c: &mut Criterion) {
+    let mut group = c.benchmark_group("detect_by_noise");
+    for sigma_mm in [10.0, 30.0] {
+        let scan = office_at(sigma_mm / 1000.0);
+        for (preset, config) in [("default", Config::default()), ("adaptive", Config::adaptive())] {
+            let mut det = LineDetector::new(config).unwrap();
+            group.bench_with_input(BenchmarkId::new(preset, sigma_mm), &scan, |b, s| {
+                b.iter(|| black_box(det.detect(black_box(s)).lines.len()))
+            });
+        }
+    }
+    group.finish();
+}
+
 fn detection(c: &mut Criterion) {
     let scans = [
         ("office", scan_of(include_str!("../sim-scenes/office-clutter.toml"), "office.toml")),
@@ -105,6 +130,7 @@ fn detection(c: &mut Criterion) {
                 black_box(&points),
                 &noise,
                 &NoiseEstimation::standard(),
+                0.0,
                 &mut scratch,
             ))
         })
@@ -112,5 +138,5 @@ fn detection(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, detection);
+criterion_group!(benches, detection, detection_by_noise);
 criterion_main!(benches);

@@ -3,14 +3,15 @@
 
 use crate::Config;
 use pcaline_fitting::{
-    Moments, Piece, is_elongated, line_from_eigen, merge_adjacent, refine_boundaries,
+    Moments, Piece, Straightness, is_elongated, line_from_eigen, merge_adjacent, refine_boundaries,
+    straightness,
 };
 use pcaline_geometry::{
     BearingTable, ConfigError, LineSegment, Pose2, RangeNoise, Scan, ScanPoints,
 };
 use pcaline_segmentation::{
-    Level2Rule, NoiseScratch, derivative_peak_split, estimate_range_noise, level1_clusters,
-    seam_start, split_at_farthest,
+    Level2Rule, NoiseEstimate, NoiseScratch, RangeGrid, derivative_peak_split, detect_range_step,
+    estimate_range_noise, level1_clusters, seam_start, split_at_farthest,
 };
 use std::ops::Range;
 
@@ -30,6 +31,10 @@ pub struct DetectedLine {
     pub first_beam: u32,
     /// Beam index of the last point.
     pub last_beam: u32,
+    /// How straight the points under the line are: residual against the
+    /// noise the thresholds used (the UTM-30LX-EW datasheet for the paper's
+    /// detector, which uses none) and the runs test of the residual signs.
+    pub straightness: Straightness,
 }
 
 impl From<&DetectedLine> for pcaline_aiding::SensorLine {
@@ -44,10 +49,15 @@ impl DetectedLine {
     /// (wrapping for a line across the seam of a closed scan). Includes points
     /// of rejected pieces lying between merged pieces.
     pub fn point_indices(&self, n_points: usize) -> impl Iterator<Item = usize> + use<> {
-        let (first, last) = (self.first_point, self.last_point);
-        let len = if last >= first { last - first + 1 } else { n_points - first + last + 1 };
-        (0..len).map(move |k| (first + k) % n_points.max(1))
+        wrapping_range(self.first_point, self.last_point, n_points)
     }
+}
+
+/// The indices `first..=last` of a ring of `n_points`, wrapping past the end
+/// when `last < first`.
+fn wrapping_range(first: usize, last: usize, n_points: usize) -> impl Iterator<Item = usize> {
+    let len = if last >= first { last - first + 1 } else { n_points - first + last + 1 };
+    (0..len).map(move |k| (first + k) % n_points.max(1))
 }
 
 /// The result of [`LineDetector::detect`], borrowing the detector's buffers.
@@ -55,9 +65,13 @@ impl DetectedLine {
 pub struct Detection<'a> {
     /// The detected lines, in scan order.
     pub lines: &'a [DetectedLine],
-    /// The range noise estimated from this scan and used by the thresholds,
-    /// when the configuration estimates it ([`Config::noise_estimation`]).
+    /// The range noise the thresholds used: the scan's estimate when the
+    /// configuration estimates it ([`Config::noise_estimation`]), else the
+    /// configuration's own; `None` when no rule uses noise (the paper).
     pub noise: Option<RangeNoise>,
+    /// What the estimation found (triples per band, the range grid), when
+    /// the configuration estimates the noise.
+    pub noise_estimate: Option<NoiseEstimate>,
     /// The valid returns as points in the sensor frame (eq. 1), in scan order;
     /// for a closed scan rotated to start at a level-1 break-point.
     pub points: &'a ScanPoints,
@@ -97,7 +111,7 @@ pub struct LineDetector {
     lines: Vec<DetectedLine>,
     derivative_scratch: Vec<[f64; 2]>,
     split_stack: Vec<Range<usize>>,
-    noise: Option<RangeNoise>,
+    noise_estimate: Option<NoiseEstimate>,
     noise_scratch: NoiseScratch,
 }
 
@@ -116,7 +130,7 @@ impl LineDetector {
             lines: Vec::new(),
             derivative_scratch: Vec::new(),
             split_stack: Vec::new(),
-            noise: None,
+            noise_estimate: None,
             noise_scratch: NoiseScratch::default(),
         })
     }
@@ -143,15 +157,25 @@ impl LineDetector {
             self.points.deskew(v, dt);
         }
         let mut config = self.config;
-        self.noise = None;
+        self.noise_estimate = None;
         if let (Some(estimation), Some(nominal)) =
             (self.config.noise_estimation, self.config.nominal_noise())
         {
-            let noise =
-                estimate_range_noise(&self.points, &nominal, &estimation, &mut self.noise_scratch);
-            config = config.with_noise(noise);
-            self.noise = Some(noise);
+            let step = match estimation.range_grid {
+                RangeGrid::Known { step_m } => step_m,
+                _ => detect_range_step(&scan.ranges),
+            };
+            let found = estimate_range_noise(
+                &self.points,
+                &nominal,
+                &estimation,
+                step,
+                &mut self.noise_scratch,
+            );
+            config = config.with_noise(found.noise);
+            self.noise_estimate = Some(found);
         }
+        let noise = config.nominal_noise();
         let seg = config.segmentation;
         let fit = config.fitting;
 
@@ -233,6 +257,8 @@ impl LineDetector {
         merge_adjacent(&mut self.pieces, &fit.merge, ring_without_break);
 
         self.lines.clear();
+        let reference_noise = noise.unwrap_or(RangeNoise::utm30lx());
+        let n_points = self.points.len();
         for piece in &self.pieces {
             let first = self.points.xy[piece.first];
             let last = self.points.xy[piece.last];
@@ -243,6 +269,13 @@ impl LineDetector {
                 && line.length() >= fit.min_line_length_m
                 && fit.orientation_test.is_none_or(|t| t.accepts(&piece.moments, &eigen))
             {
+                let indices = wrapping_range(piece.first, piece.last, n_points);
+                let straightness =
+                    straightness(indices.map(|i| &self.points.xy[i]), &line, &reference_noise);
+                let sigma = reference_noise.sigma_at(line.centroid.coords.norm());
+                if fit.straightness_test.is_some_and(|t| !t.accepts(&straightness, sigma)) {
+                    continue;
+                }
                 self.lines.push(DetectedLine {
                     line,
                     moments: piece.moments,
@@ -250,6 +283,7 @@ impl LineDetector {
                     last_point: piece.last,
                     first_beam: self.points.beam[piece.first],
                     last_beam: self.points.beam[piece.last],
+                    straightness,
                 });
             }
         }
@@ -260,7 +294,8 @@ impl LineDetector {
             level1_breaks: &self.level1_breaks,
             clusters: &self.clusters,
             sub_clusters: &self.sub_clusters,
-            noise: self.noise,
+            noise,
+            noise_estimate: self.noise_estimate,
         }
     }
 }

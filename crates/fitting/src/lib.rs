@@ -27,6 +27,7 @@ mod orientation;
 mod pca;
 mod range_bearing;
 mod residual;
+mod straightness;
 
 pub use corners::refine_boundaries;
 pub use eigen::SymmetricEigen2;
@@ -38,6 +39,7 @@ pub use orientation::OrientationTest;
 pub use pca::{fit_pca, fit_pca_slope_intercept, line_from_eigen, line_from_moments};
 pub use range_bearing::{fit_weighted, pca_covariance, point_covariance};
 pub use residual::ResidualTest;
+pub use straightness::{Straightness, StraightnessTest, straightness};
 
 use pcaline_geometry::{ConfigError, RangeNoise};
 
@@ -73,6 +75,11 @@ pub struct FitConfig {
     /// reported ([`OrientationTest`]); `None` in the paper.
     #[cfg_attr(feature = "serde", serde(default))]
     pub orientation_test: Option<OrientationTest>,
+    /// Final lines over a curved surface (a residual above the noise with
+    /// residual signs in long runs) are not reported ([`StraightnessTest`]);
+    /// `None`: every line is reported with its [`Straightness`].
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub straightness_test: Option<StraightnessTest>,
 }
 
 impl FitConfig {
@@ -88,6 +95,7 @@ impl FitConfig {
             min_line_points: 0,
             min_line_length_m: 0.0,
             orientation_test: None,
+            straightness_test: None,
         }
     }
 
@@ -115,6 +123,7 @@ impl FitConfig {
             min_line_points: 10,
             min_line_length_m: 0.3,
             orientation_test: Some(OrientationTest { max_std_rad: 2f64.to_radians(), noise }),
+            straightness_test: None,
         }
     }
 
@@ -193,6 +202,20 @@ impl FitConfig {
                 "must be > 0",
             )?;
             t.noise.validate("fitting.orientation_test.noise")?;
+        }
+        if let Some(t) = self.straightness_test {
+            ConfigError::check(
+                t.max_bow_sigmas >= 0.0 && t.max_bow_sigmas.is_finite(),
+                "fitting.straightness_test.max_bow_sigmas",
+                t.max_bow_sigmas,
+                "must be finite and >= 0",
+            )?;
+            ConfigError::check(
+                t.max_runs_z.is_finite(),
+                "fitting.straightness_test.max_runs_z",
+                t.max_runs_z,
+                "must be finite",
+            )?;
         }
         Ok(())
     }
