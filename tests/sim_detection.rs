@@ -58,3 +58,53 @@ fn noiseless_corridor_runs_are_all_detected() {
         assert!(checked > 50, "{name}: only {checked} runs checked");
     }
 }
+
+/// The protocol scores a wall the same whether the scene draws it whole or as
+/// collinear pieces end to end: the pieces are one visible surface.
+#[test]
+fn a_wall_drawn_in_pieces_scores_as_one() {
+    use pcaline_eval::{DetectFn, DetectionCriteria, DetectionEval, FaultMode, evaluate_detectors};
+    let room = |pieces: usize| {
+        // A 6 x 4 m room, each side cut into `pieces` equal collinear segments.
+        let corners = [[0.0, 0.0], [6.0, 0.0], [6.0, 4.0], [0.0, 4.0]];
+        let mut points = Vec::new();
+        for k in 0..4 {
+            let (a, b): ([f64; 2], [f64; 2]) = (corners[k], corners[(k + 1) % 4]);
+            for i in 0..pieces {
+                let t = i as f64 / pieces as f64;
+                points.push(format!(
+                    "[{}, {}]",
+                    a[0] + t * (b[0] - a[0]),
+                    a[1] + t * (b[1] - a[1])
+                ));
+            }
+        }
+        let text = format!(
+            "name = \"room\"\n[[walls]]\nclosed = true\npoints = [{}]\n[trajectory]\nstart = {{ x = 1.5, y = 1.0, heading_deg = 0.0 }}\nspeed_m_s = 0.5\nwaypoints = [[1.5, 1.0], [4.5, 1.0], [4.5, 3.0]]\n",
+            points.join(", ")
+        );
+        pcaline_io::parse_scene(Path::new("room.toml"), &text).unwrap()
+    };
+    let eval = DetectionEval {
+        sigma_m: 0.01,
+        range_resolution_m: 0.0,
+        faults: FaultMode::Off,
+        keep_motion: false,
+        seeds: 1,
+        scans: 20,
+        criteria: DetectionCriteria::default(),
+    };
+    let recall = |pieces| {
+        let mut detector = LineDetector::new(Config::default()).unwrap();
+        let mut detect = |f: &pcaline_sim::SimFrame, _: &pcaline_sim::World| {
+            detector.detect(&f.scan).lines.iter().map(|l| l.line).collect::<Vec<_>>()
+        };
+        let mut refs: Vec<&mut DetectFn<'_>> = vec![&mut detect];
+        let r = evaluate_detectors(&[room(pieces)], &eval, &mut refs).unwrap();
+        (r[0].score.recall(), r[0].score.true_walls)
+    };
+    let (whole, split) = (recall(1), recall(3));
+    assert!(whole.0 > 0.95, "whole: {whole:?}");
+    assert_eq!(whole.1, split.1, "the same visible walls: {whole:?} {split:?}");
+    assert!((whole.0 - split.0).abs() < 1e-9, "whole {whole:?}, split {split:?}");
+}

@@ -3,7 +3,8 @@
 //! some of its fields:
 //!
 //! ```toml
-//! preset = "default"          # paper | default | split-and-merge
+//! preset = "default"          # paper | default | split-and-merge | ... (PRESETS)
+//! sensor = "sick-lms"         # optional: utm30lx-ew | sick-lms | urg-04lx | rplidar
 //! [detector.fitting]
 //! eth = 30.0
 //! min_line_points = 8
@@ -22,6 +23,7 @@
 use crate::exit::BadInput;
 use anyhow::Result;
 use pcaline::aiding::{AidingConfig, AidingMode, LoopClosureConfig};
+use pcaline::geometry::SensorProfile;
 use pcaline::mapping::MapConfig;
 use pcaline::segmentation::NoiseEstimation;
 use pcaline::{Config, RangeNoise};
@@ -30,7 +32,8 @@ use std::path::Path;
 use toml::Value;
 
 /// The presets a configuration may start from.
-pub const PRESETS: [&str; 5] = ["paper", "default", "split-and-merge", "told-sigma", "estimated"];
+pub const PRESETS: [&str; 6] =
+    ["paper", "default", "split-and-merge", "told-sigma", "estimated", "adaptive"];
 
 /// A detector and map configuration with the name it was given.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,9 +51,22 @@ pub struct NamedConfig {
     pub aiding: AidingConfig,
     /// Loop closure (`pcaline map` closes loops unless `--no-loop-closure`).
     pub loop_closure: LoopClosureConfig,
+    /// The sensor the file names (`sensor = "sick-lms"`): its datasheet
+    /// noise is already in `detector`.
+    pub sensor: Option<SensorProfile>,
 }
 
 impl NamedConfig {
+    /// The detector for a log recorded with `sensor`: the configuration's,
+    /// with every noise-aware rule on the sensor's datasheet noise when a
+    /// sensor other than the file's own is given.
+    pub fn detector_for(&self, sensor: Option<SensorProfile>) -> Config {
+        match sensor {
+            Some(s) if Some(s) != self.sensor => self.detector.with_noise(s.range_noise()),
+            _ => self.detector,
+        }
+    }
+
     /// The configuration's aiding in mode `mode` (its estimator settings kept).
     pub fn aiding_in(&self, mode: AidingMode) -> AidingConfig {
         let mut a = match mode {
@@ -74,6 +90,8 @@ impl NamedConfig {
 #[derive(Debug, Serialize, Deserialize)]
 struct ConfigFile {
     preset: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sensor: Option<SensorProfile>,
     detector: Config,
     map: MapConfig,
     aiding: AidingConfig,
@@ -82,7 +100,7 @@ struct ConfigFile {
 
 /// The preset `name`; `told-sigma` is the default detector told the range
 /// noise `sigma_m` (constant); `estimated` the default estimating the noise
-/// from each scan.
+/// from each scan; `adaptive` that with curved-surface chords refused.
 fn preset(name: &str, sigma_m: f64) -> Option<(Config, MapConfig)> {
     let map = MapConfig::default();
     Some(match name {
@@ -91,6 +109,7 @@ fn preset(name: &str, sigma_m: f64) -> Option<(Config, MapConfig)> {
         "split-and-merge" => (Config::split_and_merge(), map),
         "told-sigma" => (Config::noise_aware(RangeNoise::constant(sigma_m.max(1e-3))), map),
         "estimated" => (Config::default().with_noise_estimation(NoiseEstimation::standard()), map),
+        "adaptive" => (Config::adaptive(), map),
         _ => return None,
     })
 }
@@ -106,6 +125,7 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
             map,
             aiding: AidingConfig::estimator(),
             loop_closure: LoopClosureConfig::standard(),
+            sensor: None,
         });
     }
     let path = Path::new(spec);
@@ -142,10 +162,24 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
         ))
         .into());
     };
+    // A sensor named in the file sets the noise every rule starts from;
+    // the file's own overrides of those rules still win.
+    let sensor = match overrides.get("sensor") {
+        None => None,
+        Some(v) => Some(v.as_str().and_then(SensorProfile::from_name).ok_or_else(|| {
+            BadInput(format!(
+                "{}: sensor: {v} is not a sensor ({})",
+                path.display(),
+                SensorProfile::names()
+            ))
+        })?),
+    };
+    let detector = sensor.map_or(detector, |s| detector.with_noise(s.range_noise()));
     let aiding = AidingConfig::estimator();
     let loop_closure = LoopClosureConfig::standard();
     let mut merged = Value::try_from(ConfigFile {
         preset: base_name.into(),
+        sensor,
         detector,
         map,
         aiding,
@@ -167,6 +201,7 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
         map: file.map,
         aiding: file.aiding,
         loop_closure: file.loop_closure,
+        sensor: file.sensor,
     })
 }
 
@@ -181,7 +216,14 @@ pub fn show(name: &str) -> Result<String> {
     };
     let aiding = AidingConfig::estimator();
     let loop_closure = LoopClosureConfig::standard();
-    Ok(toml::to_string(&ConfigFile { preset: name.into(), detector, map, aiding, loop_closure })?)
+    Ok(toml::to_string(&ConfigFile {
+        preset: name.into(),
+        sensor: None,
+        detector,
+        map,
+        aiding,
+        loop_closure,
+    })?)
 }
 
 /// Writes `overrides` into `base`: objects key by key, anything else whole.
@@ -219,7 +261,7 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 15] = [
+    const OPTIONAL: [&str; 16] = [
         "map.lifecycle",
         "aiding.estimator.window",
         "aiding.estimator.tentative_variance_scale",
@@ -231,6 +273,7 @@ fn optional_field(path: &str) -> bool {
         "detector.noise_estimation",
         "detector.fitting.residual_test",
         "detector.fitting.orientation_test",
+        "detector.fitting.straightness_test",
         "map.max_offset_m",
         "map.max_new_alpha_std_rad",
         "map.merge_gate",

@@ -7,7 +7,8 @@ use crate::progress;
 use anyhow::Result;
 use pcaline::LineDetector;
 use pcaline_io::{
-    LineRecord, LogRecord, ScanLines, lines_to_csv, lines_to_json, read_log, write_atomic,
+    LineRecord, LogRecord, NoiseRecord, ScanLines, lines_to_csv, lines_to_json, read_log,
+    write_atomic,
 };
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -20,7 +21,8 @@ pub struct DetectArgs {
     #[command(flatten)]
     log: LogArgs,
     /// Detector: a preset (default, paper, split-and-merge, told-sigma,
-    /// estimated) or a configuration file (see `pcaline eval --show-config`).
+    /// estimated, adaptive) or a configuration file (see `pcaline eval
+    /// --show-config`).
     #[arg(long, default_value = "default")]
     config: String,
     /// Write CSV (one line per detected line) instead of JSON.
@@ -36,7 +38,9 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     if !args.file.exists() {
         return Err(BadInput(format!("{}: no such file or folder", args.file.display())).into());
     }
-    let mut detector = LineDetector::new(resolve(&args.config, 0.01)?.detector)?;
+    let config = resolve(&args.config, 0.01)?;
+    let sensor = args.log.sensor(&args.file, config.sensor)?;
+    let mut detector = LineDetector::new(config.detector_for(sensor))?;
     let bar = progress::spinner("scans", quiet);
     let mut out: Vec<ScanLines> = Vec::new();
     let mut scan_index = 0;
@@ -47,10 +51,21 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
                 scan: scan_index,
                 position: s.position,
                 stamp_s: s.scan.stamp_s,
+                noise: d.noise.map(|n| NoiseRecord {
+                    near_sigma_m: n.near_sigma_m,
+                    far_sigma_m: n.far_sigma_m,
+                    far_from_m: n.far_from_m.is_finite().then_some(n.far_from_m),
+                    estimated: d.noise_estimate.is_some(),
+                    range_step_m: d.noise_estimate.map(|e| e.range_step_m),
+                }),
                 lines: d
                     .lines
                     .iter()
-                    .map(|l| LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))))
+                    .map(|l| {
+                        let s = l.straightness;
+                        LineRecord::new(&l.line, Some((l.first_beam, l.last_beam)))
+                            .with_straightness(s.residual_ratio, s.runs_z, s.bow_m)
+                    })
                     .collect(),
             });
             scan_index += 1;

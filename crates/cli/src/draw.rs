@@ -159,10 +159,12 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
         }
     };
     let mut found = None;
+    let mut named_sensor = None;
     let mut k = 0;
     read_log(&args.file, &args.log.options(), |r| {
         if let LogRecord::Scan(s) = r {
             if k == args.index {
+                named_sensor = s.sensor;
                 found = Some(s.scan);
                 return ControlFlow::Break(());
             }
@@ -178,8 +180,9 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
         ))
         .into());
     };
-    let mut detector =
-        LineDetector::new(crate::config_file::resolve(&args.config, 0.01)?.detector)?;
+    let config = crate::config_file::resolve(&args.config, 0.01)?;
+    let sensor = args.log.sensor.or(config.sensor).or(named_sensor);
+    let mut detector = LineDetector::new(config.detector_for(sensor))?;
     let d = detector.detect(&scan);
     let pts: Vec<[f64; 2]> = d.points.xy.iter().map(|p| [p.x, p.y]).collect();
     let (mut lo, mut hi) = ([0.0f64; 2], [0.0f64; 2]); // include the sensor

@@ -9,11 +9,11 @@ use anyhow::{Context, Result};
 use pcaline::aiding::{AidingConfig, AidingMode, SensorLine};
 use pcaline::{LineDetector, LineSegment};
 use pcaline_eval::{
-    AidedRun, AidedScore, DetectFn, DetectionCriteria, DetectionEval, evaluate_detectors,
-    oracle_lines,
+    AidedRun, AidedScore, DetectFn, DetectionCriteria, DetectionEval, FaultMode,
+    evaluate_detectors, oracle_lines,
 };
 use pcaline_io::parse_scene;
-use pcaline_sim::{Scene, SimFrame, Simulator};
+use pcaline_sim::{Scene, SimFrame, Simulator, World};
 use serde::Serialize;
 use std::path::Path;
 
@@ -38,7 +38,7 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 60)]
     scans: usize,
     /// Configurations to evaluate, side by side (repeat): a preset (paper,
-    /// default, split-and-merge, told-sigma, estimated) or a TOML/JSON file
+    /// default, split-and-merge, told-sigma, estimated, adaptive) or a TOML/JSON file
     /// naming a preset and overriding fields (see --show-config). Default:
     /// all presets.
     #[arg(long = "config")]
@@ -72,6 +72,34 @@ pub struct EvalArgs {
     /// The datasets folder (for --real); `$PCALINE_DATA` or `../shared/data`.
     #[arg(long)]
     data: Option<std::path::PathBuf>,
+    /// Evaluate on these scene files (TOML or JSON, repeat or list several)
+    /// instead of the four shipped scenes: detection, and mapping and
+    /// localization, as for the shipped ones.
+    #[arg(long = "scene", num_args = 1.., value_name = "FILE")]
+    scenes: Vec<std::path::PathBuf>,
+    /// Beam faults of the detection runs: `off` (the default) has no
+    /// outliers, dropouts or mixed pixels whatever the scene says; `on` uses
+    /// each scene's own, or 0.5% outliers, 1% dropouts and mixed pixels at
+    /// 30% of depth edges for a scene that sets none.
+    #[arg(long, value_enum, default_value_t = Faults::Off)]
+    faults: Faults,
+    /// Range resolution of the simulated sensor for detection, millimetres:
+    /// every range is rounded to a multiple of it (0: none).
+    #[arg(long = "range-step-mm", default_value_t = 0.0)]
+    range_step_mm: f64,
+    /// Keep each scene's motion skew and scan-plane tilt in the detection
+    /// runs (by default every beam of a scan is taken at one level pose).
+    #[arg(long)]
+    keep_motion: bool,
+}
+
+/// `--faults`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Faults {
+    /// No beam faults.
+    Off,
+    /// The scene's faults, or a typical mix.
+    On,
 }
 
 #[derive(Debug, Serialize)]
@@ -92,6 +120,11 @@ struct Row {
     time_per_scan_us: f64,
     /// Recall of true walls under 0.5 m, 0.5-1 m, 1-2 m, 2 m and more.
     recall_by_length: [f64; 4],
+    /// Detected lines' rms distance from the nearest true surface, in noise
+    /// sigmas: the largest, and the 99th percentile.
+    surface_rms_sigmas_max_p99: [f64; 2],
+    /// Detected lines more than 3 noise sigmas (rms) from every surface.
+    lines_off_surface: usize,
 }
 
 #[derive(Debug, Serialize)]
@@ -127,11 +160,48 @@ fn aiding_modes() -> [(&'static str, AidingConfig); 5] {
     ]
 }
 
-fn scenes() -> Result<Vec<Scene>> {
-    Ok(SCENES
+/// The shipped scenes, or the files of `--scene`. A scene that cannot be
+/// evaluated (no valid trajectory, no wall ever seen) is an error naming the
+/// file and the item.
+fn scenes(files: &[std::path::PathBuf]) -> Result<Vec<Scene>> {
+    if files.is_empty() {
+        return Ok(SCENES
+            .iter()
+            .map(|(name, text)| parse_scene(Path::new(&format!("{name}.toml")), text))
+            .collect::<Result<Vec<_>, _>>()?);
+    }
+    let criteria = DetectionCriteria::default();
+    files
         .iter()
-        .map(|(name, text)| parse_scene(Path::new(&format!("{name}.toml")), text))
-        .collect::<Result<Vec<_>, _>>()?)
+        .map(|path| {
+            let scene = pcaline_io::read_scene(path)?;
+            let sim = Simulator::new(&scene, 1)
+                .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+            if sim.is_empty() {
+                return Err(BadInput(format!(
+                    "{}: trajectory: gives no scan to evaluate",
+                    path.display()
+                ))
+                .into());
+            }
+            let seen = (0..sim.len()).step_by((sim.len() / 20).max(1)).any(|k| {
+                sim.frame(k).is_some_and(|f| {
+                    !pcaline_eval::true_walls(&f, sim.world(), &criteria).is_empty()
+                })
+            });
+            if !seen {
+                return Err(BadInput(format!(
+                    "{}: walls: no wall is seen along the trajectory as a visible wall of the \
+                     protocol ({} beams and {} m or more)",
+                    path.display(),
+                    criteria.min_beams,
+                    criteria.min_extent_m
+                ))
+                .into());
+            }
+            Ok(scene)
+        })
+        .collect()
 }
 
 /// Runs `pcaline eval`.
@@ -164,6 +234,9 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
     if args.sigma_mm.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
         return Err(BadInput("--sigma-mm must be finite and >= 0".into()).into());
     }
+    if !(args.range_step_mm.is_finite() && (0.0..=1000.0).contains(&args.range_step_mm)) {
+        return Err(BadInput("--range-step-mm must be in [0, 1000]".into()).into());
+    }
     let specs: Vec<String> = if args.configs.is_empty() {
         PRESETS.iter().map(|s| s.to_string()).collect()
     } else {
@@ -173,7 +246,7 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
     for spec in &specs {
         resolve(spec, 0.01)?;
     }
-    let scenes = scenes()?;
+    let scenes = scenes(&args.scenes)?;
     let mut report = Report { detection: Vec::new(), localization: Vec::new() };
     for &sigma_mm in &args.sigma_mm {
         let configs: Vec<NamedConfig> =
@@ -215,7 +288,7 @@ fn detection_rows(
     let mut closures: Vec<Box<DetectFn<'_>>> = detectors
         .iter_mut()
         .map(|d| {
-            Box::new(move |f: &SimFrame| -> Vec<LineSegment> {
+            Box::new(move |f: &SimFrame, _: &World| -> Vec<LineSegment> {
                 d.detect(&f.scan).lines.iter().map(|l| l.line).collect()
             }) as Box<DetectFn<'_>>
         })
@@ -228,12 +301,24 @@ fn detection_rows(
         for (name, max_std) in [("oracle", f64::INFINITY), ("oracle, std <= 2°", 2f64.to_radians())]
         {
             names.push(name.to_string());
-            closures
-                .push(Box::new(move |f: &SimFrame| oracle_lines(f, &criteria, sigma_m, max_std)));
+            closures.push(Box::new(move |f: &SimFrame, w: &World| {
+                oracle_lines(f, w, &criteria, sigma_m, max_std)
+            }));
         }
     }
     let mut refs: Vec<&mut DetectFn<'_>> = closures.iter_mut().map(|c| c.as_mut()).collect();
-    let eval = DetectionEval { sigma_m, seeds: args.seeds, scans: args.scans, criteria };
+    let eval = DetectionEval {
+        sigma_m,
+        range_resolution_m: args.range_step_mm / 1000.0,
+        faults: match args.faults {
+            Faults::Off => FaultMode::Off,
+            Faults::On => FaultMode::On,
+        },
+        keep_motion: args.keep_motion,
+        seeds: args.seeds,
+        scans: args.scans,
+        criteria,
+    };
     let results =
         evaluate_detectors(scenes, &eval, &mut refs).map_err(|e| BadInput(e.to_string()))?;
     Ok(names
@@ -260,6 +345,18 @@ fn detection_rows(
                 endpoint_rms_mm: er * 1e3,
                 time_per_scan_us: r.time_per_scan_us,
                 recall_by_length: s.recall_by_length(),
+                surface_rms_sigmas_max_p99: {
+                    let mut v: Vec<f64> =
+                        r.surface_rms_m.iter().map(|d| d / sigma_m.max(1e-3)).collect();
+                    v.sort_by(f64::total_cmp);
+                    let p99 = v.get((v.len().saturating_sub(1) as f64 * 0.99) as usize);
+                    [v.last().copied().unwrap_or(0.0), p99.copied().unwrap_or(0.0)]
+                },
+                lines_off_surface: r
+                    .surface_rms_m
+                    .iter()
+                    .filter(|d| **d > 3.0 * sigma_m.max(1e-3))
+                    .count(),
             }
         })
         .collect())
@@ -529,6 +626,18 @@ fn print_detection(rows: &[Row], compare: bool) {
         let [a, b, c, d] = r.recall_by_length;
         println!("{:>4}mm  {:<22} {a:>9.3} {b:>9.3} {c:>9.3} {d:>9.3}", r.sigma_mm, r.config);
     }
+    println!();
+    println!(
+        "Lines off their surface: rms distance of each detected line from the nearest true wall, in noise sigmas"
+    );
+    println!("{:>6}  {:<22} {:>9} {:>9} {:>14}", "sigma", "config", "max", "99%", "lines > 3 sig");
+    for r in rows {
+        let [max, p99] = r.surface_rms_sigmas_max_p99;
+        println!(
+            "{:>4}mm  {:<22} {max:>9.2} {p99:>9.2} {:>14}",
+            r.sigma_mm, r.config, r.lines_off_surface
+        );
+    }
 }
 
 fn print_real(r: &crate::eval_real::RealReport) {
@@ -659,4 +768,34 @@ fn print_real(r: &crate::eval_real::RealReport) {
         u.occupied_cells_lidar_only_without_deskew,
         u.occupied_cells_not_moving
     );
+    println!();
+    println!("Detection on every shared log (scans with walls in view: 20 valid returns or more)");
+    println!(
+        "{:<34} {:>6} {:>8} {:>7} {:>10} {:>9}  {:>24} {:>9} {:>8}",
+        "log",
+        "scans",
+        "no line",
+        "lines",
+        "on lines",
+        "noise",
+        "residual 10/50/90% (mm)",
+        "grid",
+        ""
+    );
+    for d in &r.detection {
+        let [p10, p50, p90] = d.residual_std_p10_p50_p90_m;
+        println!(
+            "{:<34} {:>6} {:>7.1}% {:>7.1} {:>9.1}% {:>6.1} mm  {:>8.1} {:>7.1} {:>7.1} {:>6.1} mm",
+            d.log,
+            d.scans,
+            100.0 * d.scans_without_line as f64 / d.scans_with_returns.max(1) as f64,
+            d.lines_per_scan,
+            100.0 * d.points_on_lines,
+            d.noise_used_median_m * 1e3,
+            p10 * 1e3,
+            p50 * 1e3,
+            p90 * 1e3,
+            d.range_step_m * 1e3
+        );
+    }
 }

@@ -161,6 +161,93 @@ pub struct RealReport {
     pub intel_drift_seed: u64,
     /// The UTM-30LX-EW bag.
     pub utm: ResidualReport,
+    /// Detection statistics of every shared log.
+    pub detection: Vec<DetectionStats>,
+}
+
+/// The shared logs whose detection statistics `eval --real` reports, under
+/// the datasets folder.
+pub const DETECTION_LOGS: [&str; 10] = [
+    "intel/intel.gfs.log",
+    "mit-csail/mit-csail.clf",
+    "mit-csail/csail.corrected.log",
+    "utm30lx-ros2",
+    "ros1/laser_scan_matcher_demo.bag",
+    "single-scans/laser_scan_1.json",
+    "single-scans/laser_scan_2.json",
+    "single-scans/laser_scan_3.json",
+    "single-scans/laser_scan_4.json",
+    "single-scans/laser_scan_5.json",
+];
+
+/// Scans with fewer valid returns are not counted as having walls in view.
+const MIN_RETURNS_IN_VIEW: usize = 20;
+
+/// What the detector finds on one real log.
+#[derive(Debug, Serialize)]
+pub struct DetectionStats {
+    /// The log, relative to the datasets folder.
+    pub log: String,
+    /// Scans read.
+    pub scans: usize,
+    /// Scans with at least 20 valid returns.
+    pub scans_with_returns: usize,
+    /// Of those, scans that yield no line.
+    pub scans_without_line: usize,
+    /// Lines per scan, mean.
+    pub lines_per_scan: f64,
+    /// Valid returns on reported lines, as a fraction of all valid returns.
+    pub points_on_lines: f64,
+    /// Percentiles 10, 50 and 90 of the per-line residual std, metres.
+    pub residual_std_p10_p50_p90_m: [f64; 3],
+    /// Median over scans of the near-band sigma the thresholds used, metres.
+    pub noise_used_median_m: f64,
+    /// The range grid step found in most scans, metres (0: continuous).
+    pub range_step_m: f64,
+}
+
+/// Detection statistics of the detector of `config` on the log at `path`
+/// (named `log` in the report).
+pub fn detection_stats(path: &Path, log: &str, config: &NamedConfig) -> Result<DetectionStats> {
+    let mut detector = LineDetector::new(config.detector)?;
+    let (mut residuals, mut noise, mut steps) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut with_returns, mut without_line, mut lines, mut on_lines, mut valid) = (0, 0, 0, 0, 0);
+    let scans = read_log(path, &LogOptions::default(), |record| {
+        if let LogRecord::Scan(s) = record {
+            let d = detector.detect(&s.scan);
+            if d.points.len() >= MIN_RETURNS_IN_VIEW {
+                with_returns += 1;
+                without_line += usize::from(d.lines.is_empty());
+            }
+            lines += d.lines.len();
+            valid += d.points.len();
+            on_lines += d.lines.iter().map(|l| l.line.n_points).sum::<usize>();
+            residuals.extend(d.lines.iter().map(|l| l.line.residual_std));
+            if let Some(n) = d.noise {
+                noise.push(n.near_sigma_m);
+            }
+            if let Some(e) = d.noise_estimate {
+                steps.push(e.range_step_m);
+            }
+        }
+        ControlFlow::Continue(())
+    })?;
+    residuals.sort_by(f64::total_cmp);
+    noise.sort_by(f64::total_cmp);
+    steps.sort_by(f64::total_cmp);
+    let pick = |v: &[f64], q: f64| v.get(((v.len() as f64 - 1.0) * q) as usize).copied();
+    Ok(DetectionStats {
+        log: log.to_string(),
+        scans,
+        scans_with_returns: with_returns,
+        scans_without_line: without_line,
+        lines_per_scan: lines as f64 / scans.max(1) as f64,
+        points_on_lines: on_lines as f64 / valid.max(1) as f64,
+        residual_std_p10_p50_p90_m: [0.1, 0.5, 0.9]
+            .map(|q| pick(&residuals, q).unwrap_or(f64::NAN)),
+        noise_used_median_m: pick(&noise, 0.5).unwrap_or(f64::NAN),
+        range_step_m: pick(&steps, 0.5).unwrap_or(0.0),
+    })
 }
 
 /// Runs every real-data measurement on the datasets folder `data`.
@@ -177,6 +264,10 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
         drift_grid,
         intel_drift_seed: seed,
         utm: utm_residuals(&data.join("utm30lx-ros2"), config)?,
+        detection: DETECTION_LOGS
+            .iter()
+            .map(|log| detection_stats(&data.join(log), log, config))
+            .collect::<Result<_>>()?,
     })
 }
 

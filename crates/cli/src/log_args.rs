@@ -1,7 +1,10 @@
 //! Arguments shared by the commands that read logs.
 
 use clap::ValueEnum;
-use pcaline_io::{CarmenOptions, LogFormat, LogOptions};
+use pcaline::geometry::SensorProfile;
+use pcaline_io::{CarmenOptions, LogFormat, LogOptions, LogRecord, read_log};
+use std::ops::ControlFlow;
+use std::path::Path;
 
 /// A log format, for `--format`.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -36,9 +39,43 @@ pub struct LogArgs {
     /// CARMEN ranges at or above this are no return, metres.
     #[arg(long, default_value_t = 80.0)]
     pub max_range: f64,
+    /// The sensor: utm30lx-ew, sick-lms, urg-04lx or rplidar. The detector's
+    /// thresholds use its datasheet noise. Absent: the configuration file's
+    /// `sensor`, else the sensor the log names (CARMEN ROBOTLASER1), else the
+    /// configuration's own (the UTM-30LX-EW for the presets).
+    #[arg(long, value_parser = parse_sensor)]
+    pub sensor: Option<SensorProfile>,
+}
+
+/// `--sensor NAME`.
+fn parse_sensor(name: &str) -> Result<SensorProfile, String> {
+    SensorProfile::from_name(name)
+        .ok_or_else(|| format!("unknown sensor {name:?} ({})", SensorProfile::names()))
 }
 
 impl LogArgs {
+    /// The sensor `file` was recorded with: `--sensor`, else `configured`
+    /// (a configuration file's), else the one the log's first scan names.
+    /// `None`: keep the configuration's noise.
+    pub fn sensor(
+        &self,
+        file: &Path,
+        configured: Option<SensorProfile>,
+    ) -> anyhow::Result<Option<SensorProfile>> {
+        if let Some(s) = self.sensor.or(configured) {
+            return Ok(Some(s));
+        }
+        let mut named = None;
+        read_log(file, &self.options(), |record| match record {
+            LogRecord::Scan(s) => {
+                named = s.sensor;
+                ControlFlow::Break(())
+            }
+            LogRecord::Odometry(_) => ControlFlow::Continue(()),
+        })?;
+        Ok(named)
+    }
+
     /// The reader options.
     pub fn options(&self) -> LogOptions {
         LogOptions {

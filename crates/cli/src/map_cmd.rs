@@ -96,7 +96,8 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     aiding_config.validate().map_err(|e| {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
-    let mut detector = LineDetector::new(config.detector)?;
+    let sensor = args.input.sensor(&args.log, config.sensor)?;
+    let mut detector = LineDetector::new(config.detector_for(sensor))?;
     let loops = (!args.no_loop_closure).then_some(config.loop_closure);
     let mut aiding = Localizer::new(aiding_config, config.map, loops)?;
     let bar = progress::spinner("scans", quiet);

@@ -53,7 +53,7 @@ pub struct TrueWall {
 pub fn true_walls(frame: &SimFrame, world: &World, criteria: &DetectionCriteria) -> Vec<TrueWall> {
     let sensor_from_world = frame.true_pose.inverse();
     frame
-        .wall_runs(criteria.min_beams)
+        .surface_runs(criteria.min_beams, world.surfaces())
         .into_iter()
         .filter_map(|run| {
             let w = &world.walls()[run.wall as usize];

@@ -26,7 +26,8 @@ pub use detection::{
     DetectionCriteria, DetectionScore, LENGTH_BINS_M, TrueWall, matches, true_walls,
 };
 pub use detection_run::{
-    DetectFn, DetectionEval, DetectorResult, evaluate_detectors, oracle_lines,
+    DetectFn, DetectionEval, DetectorResult, FaultMode, evaluate_detectors, oracle_lines,
+    surface_rms_m,
 };
 pub use fit_accuracy::{FitAccuracy, RangeBearingAccuracy, fit_accuracy, range_bearing_accuracy};
 pub use localization::{AidedRun, AidedScore, MAP_MAX_ANGLE_DEG, MAP_TOLERANCE_M};

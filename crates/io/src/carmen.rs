@@ -11,7 +11,7 @@
 //! [`CarmenOptions::max_range_m`] become +inf.
 
 use crate::{IoError, LogRecord, OdometryRecord, ScanRecord};
-use pcaline_geometry::{Pose2, Scan};
+use pcaline_geometry::{Pose2, Scan, SensorProfile};
 use std::f64::consts::PI;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
@@ -149,6 +149,7 @@ impl<R: BufRead> CarmenReader<R> {
             pose: Some(pose),
             odometry: Some(odom),
             position: self.line_no,
+            sensor: None,
         }))
     }
 
@@ -179,6 +180,7 @@ impl<R: BufRead> CarmenReader<R> {
             pose: Some(laser),
             odometry: Some(robot),
             position: self.line_no,
+            sensor: carmen_laser_type(self.num(f, 0, "laser_type")?),
         }))
     }
 
@@ -216,6 +218,18 @@ impl<R: BufRead> Iterator for CarmenReader<R> {
     }
 }
 
+/// The profile of CARMEN's `laser_type` (`carmen_laser_laser_type_t`):
+/// SICK LMS (0), PLS (1) and S300 (4) are [`SensorProfile::SickLms`], a
+/// Hokuyo URG (2) is [`SensorProfile::Urg04lx`]; a simulated (3) or unknown
+/// laser names none.
+fn carmen_laser_type(code: f64) -> Option<SensorProfile> {
+    match code {
+        0.0 | 1.0 | 4.0 => Some(SensorProfile::SickLms),
+        2.0 => Some(SensorProfile::Urg04lx),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -242,6 +256,26 @@ mod tests {
         assert_eq!(s.position, 4);
         assert_eq!(s.pose.unwrap().x, 1.0);
         assert_eq!(s.odometry.unwrap().x, 1.1);
+    }
+
+    /// `ROBOTLASER1` carries the laser type: SICK LMS (0) and Hokuyo URG (2)
+    /// name their profiles, a simulated laser (3) none.
+    #[test]
+    fn robotlaser_names_its_sensor() {
+        let line = |laser_type: u32| {
+            let mut l = format!("ROBOTLASER1 {laser_type} -1.5708 3.1416 0.0175 81.9 0.01 0 180");
+            l.push_str(&" 2.5".repeat(180));
+            l.push_str(" 0 0 0 0 1 2 0.5 0 0 0 0 0 12.5 host 12.6\n");
+            l
+        };
+        for (code, want) in
+            [(0, Some(SensorProfile::SickLms)), (2, Some(SensorProfile::Urg04lx)), (3, None)]
+        {
+            let records = read(&line(code), CarmenOptions::default());
+            let LogRecord::Scan(s) = records[0].as_ref().unwrap() else { panic!() };
+            assert_eq!(s.sensor, want, "laser_type {code}");
+            assert_eq!(s.scan.len(), 180);
+        }
     }
 
     #[test]

@@ -28,8 +28,8 @@ pub use carmen::{CarmenOptions, CarmenReader};
 pub use error::IoError;
 pub use laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1, encode_laserscan_cdr};
 pub use lines_file::{
-    LineRecord, PoseSeries, ScanLines, lines_to_csv, lines_to_json, read_map, read_pose_series,
-    write_json, write_map_csv, write_map_json,
+    LineRecord, NoiseRecord, PoseSeries, ScanLines, lines_to_csv, lines_to_json, read_map,
+    read_pose_series, write_json, write_map_csv, write_map_json,
 };
 pub use log::{LogFormat, LogOptions, read_log};
 pub use pcaline_geometry::Relation;

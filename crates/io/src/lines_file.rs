@@ -16,8 +16,28 @@ pub struct ScanLines {
     pub position: usize,
     /// Time, seconds.
     pub stamp_s: Option<f64>,
+    /// The range noise the detector's thresholds used for this scan, when
+    /// it uses one (the paper's detector does not).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise: Option<NoiseRecord>,
     /// The lines.
     pub lines: Vec<LineRecord>,
+}
+
+/// The range noise a detection used, for output.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct NoiseRecord {
+    /// Sigma below `far_from_m`, metres.
+    pub near_sigma_m: f64,
+    /// Sigma at and beyond `far_from_m`, metres.
+    pub far_sigma_m: f64,
+    /// Where the far band starts, metres (`null` when it never does).
+    pub far_from_m: Option<f64>,
+    /// Whether the sigmas were estimated from the scan (else the
+    /// configuration's, the sensor profile's datasheet).
+    pub estimated: bool,
+    /// The range grid step found or known, metres, when estimated.
+    pub range_step_m: Option<f64>,
 }
 
 /// One line, for output.
@@ -41,6 +61,12 @@ pub struct LineRecord {
     pub first_beam: Option<u32>,
     /// Last beam, when known.
     pub last_beam: Option<u32>,
+    /// The residual in noise sigmas, when the straightness is known.
+    pub residual_ratio: Option<f64>,
+    /// The runs test's z of the residual signs, when known.
+    pub runs_z: Option<f64>,
+    /// The bow (sagitta of the residuals' parabola), metres, when known.
+    pub bow_m: Option<f64>,
 }
 
 impl LineRecord {
@@ -56,6 +82,20 @@ impl LineRecord {
             residual_std_m: l.residual_std,
             first_beam: beams.map(|b| b.0),
             last_beam: beams.map(|b| b.1),
+            residual_ratio: None,
+            runs_z: None,
+            bow_m: None,
+        }
+    }
+
+    /// The same record with the line's straightness statistic: residual in
+    /// noise sigmas, runs z, bow in metres (`pcaline_fitting::Straightness`).
+    pub fn with_straightness(self, residual_ratio: f64, runs_z: f64, bow_m: f64) -> Self {
+        LineRecord {
+            residual_ratio: Some(residual_ratio),
+            runs_z: Some(runs_z),
+            bow_m: Some(bow_m),
+            ..self
         }
     }
 }
@@ -75,14 +115,15 @@ pub fn lines_to_json(scans: &[ScanLines]) -> String {
 /// Lines of many scans as CSV, one row per line.
 pub fn lines_to_csv(scans: &[ScanLines]) -> String {
     let mut s = String::from(
-        "scan,position,stamp_s,alpha_rad,d_m,start_x,start_y,end_x,end_y,length_m,n_points,residual_std_m,first_beam,last_beam\n",
+        "scan,position,stamp_s,alpha_rad,d_m,start_x,start_y,end_x,end_y,length_m,n_points,residual_std_m,first_beam,last_beam,residual_ratio,runs_z,bow_m\n",
     );
     let opt = |v: Option<u32>| v.map(|b| b.to_string()).unwrap_or_default();
+    let optf = |v: Option<f64>| v.map(|x| x.to_string()).unwrap_or_default();
     for scan in scans {
         for l in &scan.lines {
             let _ = writeln!(
                 s,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 scan.scan,
                 scan.position,
                 scan.stamp_s.map(|t| t.to_string()).unwrap_or_default(),
@@ -96,7 +137,10 @@ pub fn lines_to_csv(scans: &[ScanLines]) -> String {
                 l.n_points,
                 l.residual_std_m,
                 opt(l.first_beam),
-                opt(l.last_beam)
+                opt(l.last_beam),
+                optf(l.residual_ratio),
+                optf(l.runs_z),
+                optf(l.bow_m)
             );
         }
     }

@@ -1,6 +1,6 @@
 //! [`LogRecord`]: what every log reader yields, one record at a time.
 
-use pcaline_geometry::{Pose2, Scan};
+use pcaline_geometry::{Pose2, Scan, SensorProfile};
 
 /// One record of a log.
 #[derive(Debug, Clone, PartialEq)]
@@ -23,6 +23,9 @@ pub struct ScanRecord {
     pub odometry: Option<Pose2>,
     /// Where the record came from: a 1-based line number or message index.
     pub position: usize,
+    /// The sensor the log names, when its format carries the type (CARMEN
+    /// `ROBOTLASER1`'s `laser_type`); `None` otherwise.
+    pub sensor: Option<SensorProfile>,
 }
 
 /// An odometry pose from a log.

@@ -12,7 +12,7 @@ const ROS1_TYPE: &str = "sensor_msgs/LaserScan";
 const ROS2_TYPE: &str = "sensor_msgs/msg/LaserScan";
 
 fn scan_record(scan: pcaline_geometry::Scan, position: usize) -> LogRecord {
-    LogRecord::Scan(ScanRecord { scan, pose: None, odometry: None, position })
+    LogRecord::Scan(ScanRecord { scan, pose: None, odometry: None, position, sensor: None })
 }
 
 /// Streams the LaserScans of a ROS 1 bag; errors name the message number.

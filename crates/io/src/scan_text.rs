@@ -135,7 +135,13 @@ pub fn read_scan_json(
     let mut count = 0;
     let mut emit = |scan: Scan, position: usize| {
         count += 1;
-        visit(LogRecord::Scan(ScanRecord { scan, pose: None, odometry: None, position }))
+        visit(LogRecord::Scan(ScanRecord {
+            scan,
+            pose: None,
+            odometry: None,
+            position,
+            sensor: None,
+        }))
     };
     let parse_err = |e: serde_json::Error| IoError::parse(path, Some(e.line()), e.to_string());
     match first {
@@ -234,6 +240,7 @@ pub fn read_scan_csv(
             pose: None,
             odometry: None,
             position: line_no,
+            sensor: None,
         }))
         .is_break()
         {
