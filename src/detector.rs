@@ -258,7 +258,6 @@ impl LineDetector {
 
         self.lines.clear();
         let reference_noise = noise.unwrap_or(RangeNoise::utm30lx());
-        let n_points = self.points.len();
         for piece in &self.pieces {
             let first = self.points.xy[piece.first];
             let last = self.points.xy[piece.last];
@@ -269,9 +268,15 @@ impl LineDetector {
                 && line.length() >= fit.min_line_length_m
                 && fit.orientation_test.is_none_or(|t| t.accepts(&piece.moments, &eigen))
             {
-                let indices = wrapping_range(piece.first, piece.last, n_points);
-                let straightness =
-                    straightness(indices.map(|i| &self.points.xy[i]), &line, &reference_noise);
+                // The line's points in scan order, wrapping past the end of a
+                // closed scan.
+                let xy = &self.points.xy;
+                let straightness = if piece.last >= piece.first {
+                    straightness(&xy[piece.first..=piece.last], &line, &reference_noise)
+                } else {
+                    let wrapped = xy[piece.first..].iter().chain(&xy[..=piece.last]);
+                    straightness(wrapped, &line, &reference_noise)
+                };
                 let sigma = reference_noise.sigma_at(line.centroid.coords.norm());
                 if fit.straightness_test.is_some_and(|t| !t.accepts(&straightness, sigma)) {
                     continue;

@@ -61,9 +61,10 @@ pub fn straightness<'a>(
     let normal = line.normal();
     let tangent = pcaline_geometry::Vector2::new(-normal.y, normal.x);
     let centre = line.centroid.coords.dot(&tangent);
-    let half = 0.5 * line.length().max(1e-9);
-    let (mut positive, mut negative, mut runs) = (0usize, 0usize, 0usize);
-    let mut last: Option<bool> = None;
+    let inv_half = 2.0 / line.length().max(1e-9);
+    // Signs as 0 or 1 (2: none yet), counted without branches: on white
+    // residuals a sign change is a coin flip no predictor guesses.
+    let (mut positive, mut signed, mut runs, mut last) = (0usize, 0usize, 0usize, 2u8);
     // Normal equations of r = a + b u + c u², u in [-1, 1] along the line:
     // sums of u^0..u^4 and of r, r u, r u².
     let (mut su, mut sr) = ([0.0f64; 5], [0.0f64; 3]);
@@ -73,7 +74,7 @@ pub fn straightness<'a>(
         if !r.is_finite() {
             continue;
         }
-        let u = (p.coords.dot(&tangent) - centre) / half;
+        let u = (p.coords.dot(&tangent) - centre) * inv_half;
         let u2 = u * u;
         su[0] += 1.0;
         su[1] += u;
@@ -84,20 +85,15 @@ pub fn straightness<'a>(
         sr[1] += r * u;
         sr[2] += r * u2;
         n += 1;
-        if r == 0.0 {
-            continue;
+        if r != 0.0 {
+            let sign = u8::from(r > 0.0);
+            positive += usize::from(sign);
+            signed += 1;
+            runs += usize::from(sign != last);
+            last = sign;
         }
-        let sign = r > 0.0;
-        if sign {
-            positive += 1
-        } else {
-            negative += 1
-        }
-        if last != Some(sign) {
-            runs += 1;
-        }
-        last = Some(sign);
     }
+    let negative = signed - positive;
     let sigma = noise.sigma_at(line.centroid.coords.norm());
     let residual_ratio = if line.residual_std == 0.0 { 0.0 } else { line.residual_std / sigma };
     // The parabola's value at the ends minus at the middle is c; the surface
