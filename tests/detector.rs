@@ -320,3 +320,29 @@ proptest! {
         }
     }
 }
+
+/// The adaptive detector says which noise it used: the profile's (widened by
+/// the range grid) when a scan has too few triples to estimate from, the
+/// scan's own when a clearly noisier sensor took it.
+#[test]
+fn the_adaptive_detector_reports_the_noise_it_used() {
+    let mut det = LineDetector::new(Config::adaptive()).unwrap();
+    // 12 beams on a wall: too few triples (30 a band) to estimate.
+    let few = Scan::new(-0.05, 0.25f32.to_radians(), 0.1, 30.0, vec![2.0; 12]);
+    let d = det.detect(&few);
+    let e = d.noise_estimate.unwrap();
+    assert!(e.samples[0] < 30, "{e:?}");
+    assert_eq!(d.noise.unwrap().near_sigma_m, pcaline::RangeNoise::utm30lx().near_sigma_m);
+    // A 40 mm sensor on the walls of a room: the estimate follows it.
+    let walls = [(p(3.0, -4.0), p(3.0, 2.0)), (p(3.0, 2.0), p(-1.0, 2.0))];
+    let noisy = utm_scan(&walls, 0.04, 7);
+    let d = det.detect(&noisy);
+    let sigma = d.noise.unwrap().near_sigma_m;
+    assert!((sigma / 0.04 - 1.0).abs() < 0.25, "{sigma}");
+    assert!(d.noise_estimate.unwrap().samples[0] >= 30);
+    // The default is told the datasheet and estimates nothing.
+    let mut default = LineDetector::new(Config::default()).unwrap();
+    let d = default.detect(&noisy);
+    assert!(d.noise_estimate.is_none());
+    assert_eq!(d.noise, Some(pcaline::RangeNoise::utm30lx()));
+}

@@ -317,3 +317,127 @@ fn detect_takes_a_configuration_file_and_rejects_an_unknown_preset() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("neither a preset"));
 }
+
+/// `--sensor` and `sensor =` set the noise every threshold uses, and the
+/// output says which; the straightness of each line is written; an unknown
+/// sensor is an error naming the flag or the file's key.
+#[test]
+fn detect_takes_a_sensor_and_says_which_noise_it_used() {
+    let scan = tmp("sensor-wall.json");
+    let ranges: Vec<String> = (0..241)
+        .map(|i| {
+            let b = -0.52f64 + i as f64 * 0.25f64.to_radians();
+            format!("{:.2}", 2.0 / b.cos())
+        })
+        .collect();
+    std::fs::write(
+        &scan,
+        format!(
+            "{{\"angle_min\": -0.52, \"angle_increment\": {}, \"range_min\": 0.1, \"range_max\": 30.0, \"ranges\": [{}]}}",
+            0.25f64.to_radians(),
+            ranges.join(",")
+        ),
+    )
+    .unwrap();
+    let detect = |args: &[&str]| -> serde_json::Value {
+        let mut all = vec!["--quiet", "detect", s(&scan)];
+        all.extend_from_slice(args);
+        let out = pcaline(&all);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()[0].clone()
+    };
+    let default = detect(&[]);
+    assert_eq!(default["noise"]["near_sigma_m"], 0.01);
+    assert_eq!(default["noise"]["far_sigma_m"], 0.03);
+    assert_eq!(default["noise"]["estimated"], false);
+    let line = &default["lines"][0];
+    for key in ["residual_ratio", "runs_z", "bow_m"] {
+        assert!(line[key].as_f64().unwrap().is_finite(), "{key}: {line}");
+    }
+    let rplidar = detect(&["--sensor", "rplidar"]);
+    assert_eq!(rplidar["noise"]["near_sigma_m"], 0.02);
+    assert_eq!(rplidar["noise"]["far_from_m"], 3.0);
+    // The adaptive preset finds the centimetre grid of these ranges.
+    let adaptive = detect(&["--config", "adaptive"]);
+    assert_eq!(adaptive["noise"]["estimated"], true);
+    assert_eq!(adaptive["noise"]["range_step_m"], 0.01);
+    let file = tmp("sick.toml");
+    std::fs::write(&file, "preset = \"default\"\nsensor = \"sick-lms\"\n").unwrap();
+    let sick = detect(&["--config", s(&file)]);
+    assert_eq!(sick["noise"]["far_from_m"], 8.0);
+    // The command line wins over the file.
+    let urg = detect(&["--config", s(&file), "--sensor", "urg-04lx"]);
+    assert_eq!(urg["noise"]["far_from_m"], 1.0);
+
+    let out = pcaline(&["--quiet", "detect", s(&scan), "--sensor", "lms"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--sensor") && err.contains("sick-lms"), "{err}");
+    std::fs::write(&file, "preset = \"default\"\nsensor = \"lms\"\n").unwrap();
+    let out = pcaline(&["--quiet", "detect", s(&scan), "--config", s(&file)]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("sick.toml") && err.contains("sensor"), "{err}");
+}
+
+/// `eval --scene` scores the files it is given (faults on or off), and a
+/// scene it cannot evaluate is an error naming the file and the item.
+#[test]
+fn eval_on_any_scene_file() {
+    let scene = tmp("eval-scene.toml");
+    let out = pcaline(&[
+        "scene",
+        "generate",
+        "--seed",
+        "5",
+        "--cols",
+        "2",
+        "--rows",
+        "2",
+        "--max-waypoints",
+        "3",
+        "-o",
+        s(&scene),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let eval = |faults: &str| -> serde_json::Value {
+        let out = pcaline(&[
+            "--quiet",
+            "eval",
+            "--scene",
+            s(&scene),
+            "--config",
+            "default",
+            "--sigma-mm",
+            "10",
+            "--seeds",
+            "1",
+            "--scans",
+            "6",
+            "--faults",
+            faults,
+            "--no-localization",
+            "--json",
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()["detection"][0].clone()
+    };
+    let (off, on) = (eval("off"), eval("on"));
+    assert_eq!(off["scans"], 6);
+    assert!(off["recall"].as_f64().unwrap() > 0.8, "{off}");
+    // Dropouts and outliers break walls into shorter visible runs.
+    assert_ne!(off["true_walls"], on["true_walls"], "{off} {on}");
+    assert!(off["lines_off_surface"].is_u64());
+
+    // A hall whose walls all lie beyond the sensor's 30 m.
+    let blind = tmp("blind.toml");
+    std::fs::write(
+        &blind,
+        "name = \"blind\"\n[[walls]]\nclosed = true\npoints = [[-100.0, -100.0], [100.0, -100.0], [100.0, 100.0], [-100.0, 100.0]]\n[trajectory]\nstart = { x = 0.0, y = 0.0, heading_deg = 0.0 }\nspeed_m_s = 1.0\nwaypoints = [[1.0, 0.0]]\n",
+    )
+    .unwrap();
+    let out = pcaline(&["--quiet", "eval", "--scene", s(&blind), "--no-localization"]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("blind.toml") && err.contains("walls"), "{err}");
+}

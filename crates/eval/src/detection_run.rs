@@ -190,6 +190,24 @@ mod tests {
     use super::*;
     use pcaline_sim::{MazeConfig, generate_maze};
 
+    #[test]
+    fn fault_modes_are_explicit() {
+        let mut scene = generate_maze(&MazeConfig::small("t"), 1).unwrap();
+        FaultMode::On.apply(&mut scene);
+        let s = &scene.sensor;
+        let typical = [s.outlier_probability, s.dropout_probability, s.mixed_pixel_probability];
+        assert_eq!(typical, FaultMode::TYPICAL);
+        scene.sensor.dropout_probability = 0.2;
+        FaultMode::On.apply(&mut scene);
+        assert_eq!(scene.sensor.dropout_probability, 0.2, "a scene's own faults are kept");
+        FaultMode::Off.apply(&mut scene);
+        let s = &scene.sensor;
+        assert_eq!(
+            [s.outlier_probability, s.dropout_probability, s.mixed_pixel_probability],
+            [0.0; 3]
+        );
+    }
+
     /// Without noise a perfect segmentation finds every true wall and nothing
     /// else; a detector that finds nothing scores recall 0.
     #[test]
