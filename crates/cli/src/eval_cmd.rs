@@ -771,16 +771,8 @@ fn print_real(r: &crate::eval_real::RealReport) {
     println!();
     println!("Detection on every shared log (scans with walls in view: 20 valid returns or more)");
     println!(
-        "{:<34} {:>6} {:>8} {:>7} {:>10} {:>9}  {:>24} {:>9} {:>8}",
-        "log",
-        "scans",
-        "no line",
-        "lines",
-        "on lines",
-        "noise",
-        "residual 10/50/90% (mm)",
-        "grid",
-        ""
+        "{:<34} {:>6} {:>8} {:>7} {:>10} {:>9}  {:>24} {:>9}",
+        "log", "scans", "no line", "lines", "on lines", "noise", "residual 10/50/90% (mm)", "grid"
     );
     for d in &r.detection {
         let [p10, p50, p90] = d.residual_std_p10_p50_p90_m;

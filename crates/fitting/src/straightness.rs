@@ -25,8 +25,8 @@ pub struct Straightness {
     pub residual_ratio: f64,
     /// The runs test's z score of the residual signs, in scan order: about
     /// N(0, 1) for white residuals, strongly negative when residuals keep one
-    /// sign over long stretches. 0 with fewer than 10 signed residuals or
-    /// only one sign.
+    /// sign over long stretches. 0 with fewer than 10 points or only one
+    /// sign.
     pub runs_z: f64,
     /// The sagitta of the parabola fitted to the residuals along the line,
     /// metres: how far the surface under the line's middle lies from the
@@ -36,8 +36,9 @@ pub struct Straightness {
 }
 
 /// The straightness of `line` over `points` (its points in scan order) with
-/// range noise `noise`. Residuals of exactly zero have no sign and are
-/// skipped by the runs test.
+/// range noise `noise`. A residual of exactly zero counts as negative in the
+/// runs test. Non-finite points or lines give non-finite sums, reported as a
+/// bow of 0.
 ///
 /// ```
 /// use pcaline_fitting::{fit_pca, straightness};
@@ -64,19 +65,15 @@ pub fn straightness<'a>(
     let inv_half = 2.0 / line.length().max(1e-9);
     // Signs as 0 or 1 (2: none yet), counted without branches: on white
     // residuals a sign change is a coin flip no predictor guesses.
-    let (mut positive, mut signed, mut runs, mut last) = (0usize, 0usize, 0usize, 2u8);
+    let (mut positive, mut runs, mut last) = (0usize, 0usize, 2u8);
     // Normal equations of r = a + b u + c u², u in [-1, 1] along the line:
     // sums of u^0..u^4 and of r, r u, r u².
     let (mut su, mut sr) = ([0.0f64; 5], [0.0f64; 3]);
     let mut n = 0usize;
     for p in points {
         let r = p.coords.dot(&normal) - line.d;
-        if !r.is_finite() {
-            continue;
-        }
         let u = (p.coords.dot(&tangent) - centre) * inv_half;
         let u2 = u * u;
-        su[0] += 1.0;
         su[1] += u;
         su[2] += u2;
         su[3] += u2 * u;
@@ -85,14 +82,13 @@ pub fn straightness<'a>(
         sr[1] += r * u;
         sr[2] += r * u2;
         n += 1;
-        if r != 0.0 {
-            let sign = u8::from(r > 0.0);
-            positive += usize::from(sign);
-            signed += 1;
-            runs += usize::from(sign != last);
-            last = sign;
-        }
+        let sign = u8::from(r > 0.0);
+        positive += usize::from(sign);
+        runs += usize::from(sign != last);
+        last = sign;
     }
+    su[0] = n as f64;
+    let signed = n;
     let negative = signed - positive;
     let sigma = noise.sigma_at(line.centroid.coords.norm());
     let residual_ratio = if line.residual_std == 0.0 { 0.0 } else { line.residual_std / sigma };
