@@ -35,6 +35,28 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// A JSON scan file `name` of a wall 2 m ahead, 241 beams of 0.25°, ranges
+/// written with `decimals` decimals.
+fn wall_scan(name: &str, decimals: usize) -> PathBuf {
+    let scan = tmp(name);
+    let ranges: Vec<String> = (0..241)
+        .map(|i| {
+            let b = -0.52f64 + i as f64 * 0.25f64.to_radians();
+            format!("{:.*}", decimals, 2.0 / b.cos())
+        })
+        .collect();
+    std::fs::write(
+        &scan,
+        format!(
+            "{{\"angle_min\": -0.52, \"angle_increment\": {}, \"range_min\": 0.1, \"range_max\": 30.0, \"ranges\": [{}]}}",
+            0.25f64.to_radians(),
+            ranges.join(",")
+        ),
+    )
+    .unwrap();
+    scan
+}
+
 #[test]
 fn run_on_a_small_generated_scene_writes_every_output() {
     let scene = tmp("small.toml");
@@ -285,22 +307,7 @@ fn eval_compares_two_configurations_side_by_side() {
 #[test]
 fn detect_takes_a_configuration_file_and_rejects_an_unknown_preset() {
     // One scan: a wall 2 m ahead, 241 beams.
-    let scan = tmp("wall.json");
-    let ranges: Vec<String> = (0..241)
-        .map(|i| {
-            let b = -0.52f64 + i as f64 * 0.25f64.to_radians();
-            format!("{:.4}", 2.0 / b.cos())
-        })
-        .collect();
-    std::fs::write(
-        &scan,
-        format!(
-            "{{\"angle_min\": -0.52, \"angle_increment\": {}, \"range_min\": 0.1, \"range_max\": 30.0, \"ranges\": [{}]}}",
-            0.25f64.to_radians(),
-            ranges.join(",")
-        ),
-    )
-    .unwrap();
+    let scan = wall_scan("wall.json", 4);
     let config = tmp("long-lines.toml");
     // Report only lines of 3 m or more: the 1.15 m wall is not.
     std::fs::write(&config, "preset = \"default\"\n[detector.fitting]\nmin_line_length_m = 3.0\n")
@@ -323,22 +330,7 @@ fn detect_takes_a_configuration_file_and_rejects_an_unknown_preset() {
 /// sensor is an error naming the flag or the file's key.
 #[test]
 fn detect_takes_a_sensor_and_says_which_noise_it_used() {
-    let scan = tmp("sensor-wall.json");
-    let ranges: Vec<String> = (0..241)
-        .map(|i| {
-            let b = -0.52f64 + i as f64 * 0.25f64.to_radians();
-            format!("{:.2}", 2.0 / b.cos())
-        })
-        .collect();
-    std::fs::write(
-        &scan,
-        format!(
-            "{{\"angle_min\": -0.52, \"angle_increment\": {}, \"range_min\": 0.1, \"range_max\": 30.0, \"ranges\": [{}]}}",
-            0.25f64.to_radians(),
-            ranges.join(",")
-        ),
-    )
-    .unwrap();
+    let scan = wall_scan("sensor-wall.json", 2);
     let detect = |args: &[&str]| -> serde_json::Value {
         let mut all = vec!["--quiet", "detect", s(&scan)];
         all.extend_from_slice(args);
