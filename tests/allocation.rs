@@ -1,5 +1,6 @@
 //! The detector reuses its buffers: once warmed up on a scan, detecting a scan
-//! of the same size allocates nothing. Checked with a counting allocator.
+//! of the same size allocates nothing, with or without the noise estimate and
+//! the straightness test. Checked with a counting allocator.
 
 #![allow(unsafe_code)] // the counting allocator below
 
@@ -35,7 +36,7 @@ static GLOBAL: Counting = Counting;
 fn steady_state_detection_does_not_allocate() {
     let walls = support::rectangle(-2.0, -3.0, 5.0, 4.0);
     let scans: Vec<_> = (0..4).map(|seed| support::utm_scan(&walls, 0.01, seed)).collect();
-    for config in [Config::paper(), Config::default()] {
+    for config in [Config::paper(), Config::default(), Config::adaptive()] {
         let mut det = LineDetector::new(config).unwrap();
         for scan in &scans {
             det.detect(scan);
