@@ -770,15 +770,31 @@ fn print_real(r: &crate::eval_real::RealReport) {
     );
     println!();
     println!("Detection on every shared log (scans with walls in view: 20 valid returns or more)");
+    print_detection_stats(&r.detection);
+    println!();
+    println!("The same, on each log's own sensor profile (--sensor)");
+    print_detection_stats(&r.detection_with_sensor);
+}
+
+fn print_detection_stats(rows: &[crate::eval_real::DetectionStats]) {
     println!(
-        "{:<34} {:>6} {:>8} {:>7} {:>10} {:>9}  {:>24} {:>9}",
-        "log", "scans", "no line", "lines", "on lines", "noise", "residual 10/50/90% (mm)", "grid"
+        "{:<34} {:>10} {:>6} {:>8} {:>7} {:>10} {:>9}  {:>24} {:>9}",
+        "log",
+        "sensor",
+        "scans",
+        "no line",
+        "lines",
+        "on lines",
+        "noise",
+        "residual 10/50/90% (mm)",
+        "grid"
     );
-    for d in &r.detection {
+    for d in rows {
         let [p10, p50, p90] = d.residual_std_p10_p50_p90_m;
         println!(
-            "{:<34} {:>6} {:>7.1}% {:>7.1} {:>9.1}% {:>6.1} mm  {:>8.1} {:>7.1} {:>7.1} {:>6.1} mm",
+            "{:<34} {:>10} {:>6} {:>7.1}% {:>7.1} {:>9.1}% {:>6.1} mm  {:>8.1} {:>7.1} {:>7.1} {:>6.1} mm",
             d.log,
+            d.sensor.as_deref().unwrap_or("-"),
             d.scans,
             100.0 * d.scans_without_line as f64 / d.scans_with_returns.max(1) as f64,
             d.lines_per_scan,

@@ -347,7 +347,7 @@ fn detect_takes_a_sensor_and_says_which_noise_it_used() {
         assert!(line[key].as_f64().unwrap().is_finite(), "{key}: {line}");
     }
     let rplidar = detect(&["--sensor", "rplidar"]);
-    assert_eq!(rplidar["noise"]["near_sigma_m"], 0.02);
+    assert_eq!(rplidar["noise"]["near_sigma_m"], 0.015);
     assert_eq!(rplidar["noise"]["far_from_m"], 3.0);
     // The adaptive preset finds the centimetre grid of these ranges.
     let adaptive = detect(&["--config", "adaptive"]);
@@ -359,7 +359,7 @@ fn detect_takes_a_sensor_and_says_which_noise_it_used() {
     assert_eq!(sick["noise"]["far_from_m"], 8.0);
     // The command line wins over the file.
     let urg = detect(&["--config", s(&file), "--sensor", "urg-04lx"]);
-    assert_eq!(urg["noise"]["far_from_m"], 1.0);
+    assert_eq!(urg["noise"]["far_from_m"], 2.0);
 
     let out = pcaline(&["--quiet", "detect", s(&scan), "--sensor", "lms"]);
     assert_eq!(out.status.code(), Some(2));

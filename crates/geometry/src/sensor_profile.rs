@@ -7,6 +7,11 @@ use crate::RangeNoise;
 /// configuration files): what its datasheet says of its range noise and of
 /// the grid its ranges are reported on. The detector builds its thresholds
 /// on the profile's noise; estimation from the scans starts from it.
+///
+/// Where a datasheet gives a repeatability (one sigma) it is used as is;
+/// where it gives only an accuracy (`±`), that is taken as a two-sigma bound.
+/// No profile goes below 10 mm at short range, the floor every noise-aware
+/// threshold was measured with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
@@ -17,17 +22,20 @@ pub enum SensorProfile {
     #[cfg_attr(feature = "serde", serde(rename = "utm30lx-ew"))]
     Utm30lxEw,
     /// SICK LMS 1xx/2xx: 10 mm below 8 m, 20 mm beyond (the LMS 200's
-    /// statistical error with its systematic error at short range; LMS 291
-    /// class at long range); ranges in centimetres, as CARMEN logs them.
+    /// 5 mm statistical error at the 10 mm floor, its ±15 mm systematic
+    /// error as two sigmas beyond); ranges in centimetres, as CARMEN logs
+    /// them.
     #[cfg_attr(feature = "serde", serde(rename = "sick-lms"))]
     SickLms,
-    /// Hokuyo URG-04LX: 10 mm below 1 m, 30 mm beyond (±10 mm to 1 m, ±1%
-    /// of the range to 4 m); ranges in millimetres.
+    /// Hokuyo URG-04LX: 10 mm below 2 m, 20 mm beyond (accuracy ±10 mm to
+    /// 1 m and ±1% of the range to 4 m, as two sigmas); ranges in
+    /// millimetres.
     #[cfg_attr(feature = "serde", serde(rename = "urg-04lx"))]
     Urg04lx,
-    /// A low-cost 360° triangulation scanner (RPLIDAR A1/A2 class): 20 mm
-    /// below 3 m, 50 mm beyond (1% of the range to 3 m, 2-2.5% beyond);
-    /// ranges in quarter millimetres, taken as continuous.
+    /// A low-cost 360° triangulation scanner (RPLIDAR A1/A2 class): 15 mm
+    /// below 3 m, 50 mm beyond (accuracy 1% of the range to 3 m, 2% to 5 m
+    /// and 2.5% beyond, as two sigmas); ranges in quarter millimetres, taken
+    /// as continuous.
     #[cfg_attr(feature = "serde", serde(rename = "rplidar"))]
     Rplidar,
 }
@@ -76,10 +84,10 @@ impl SensorProfile {
                 RangeNoise { near_sigma_m: 0.01, far_sigma_m: 0.02, far_from_m: 8.0 }
             }
             SensorProfile::Urg04lx => {
-                RangeNoise { near_sigma_m: 0.01, far_sigma_m: 0.03, far_from_m: 1.0 }
+                RangeNoise { near_sigma_m: 0.01, far_sigma_m: 0.02, far_from_m: 2.0 }
             }
             SensorProfile::Rplidar => {
-                RangeNoise { near_sigma_m: 0.02, far_sigma_m: 0.05, far_from_m: 3.0 }
+                RangeNoise { near_sigma_m: 0.015, far_sigma_m: 0.05, far_from_m: 3.0 }
             }
         }
     }

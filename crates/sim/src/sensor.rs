@@ -100,7 +100,7 @@ impl SensorModel {
 
     /// A Hokuyo URG-04LX: 683 beams of 360°/1024 from -120°, 0.02-5.6 m,
     /// 10 Hz, the datasheet's noise ([`SensorProfile::Urg04lx`]: 10 mm below
-    /// 1 m, 30 mm beyond), ranges in millimetres.
+    /// 2 m, 20 mm beyond), ranges in millimetres.
     pub fn urg_04lx() -> Self {
         SensorModel {
             beams: 683,
@@ -117,7 +117,7 @@ impl SensorModel {
 
     /// A low-cost 360° scanner (RPLIDAR A2 class): 400 beams of 0.9° all
     /// round from -180°, 0.15-12 m, 10 Hz, the class's noise
-    /// ([`SensorProfile::Rplidar`]: 20 mm below 3 m, 50 mm beyond).
+    /// ([`SensorProfile::Rplidar`]: 15 mm below 3 m, 50 mm beyond).
     pub fn rplidar() -> Self {
         SensorModel {
             beams: 400,
