@@ -309,6 +309,32 @@ mod tests {
         }
     }
 
+    /// Every preset survives JSON, which has no infinity: serde_json writes
+    /// an infinite limit as `null`, and every such field reads `null` back
+    /// as infinite.
+    #[test]
+    fn every_preset_round_trips_through_json() {
+        for name in PRESETS {
+            let p = resolve(name, 0.01).unwrap();
+            let file = ConfigFile {
+                preset: name.into(),
+                sensor: Some(SensorProfile::SickLms),
+                detector: p.detector,
+                map: p.map,
+                aiding: p.aiding,
+                loop_closure: p.loop_closure,
+            };
+            let json = serde_json::to_string(&file).unwrap();
+            let back: ConfigFile =
+                serde_json::from_str(&json).unwrap_or_else(|e| panic!("{name}: {e}\n{json}"));
+            assert_eq!(
+                (back.sensor, back.detector, back.map, back.aiding, back.loop_closure),
+                (file.sensor, file.detector, file.map, file.aiding, file.loop_closure),
+                "{name}"
+            );
+        }
+    }
+
     #[test]
     fn a_file_overrides_only_the_fields_it_names() {
         let path = write(

@@ -15,8 +15,19 @@ pub struct RangeNoise {
     pub near_sigma_m: f64,
     /// Sigma in metres for ranges at or beyond `far_from_m`.
     pub far_sigma_m: f64,
-    /// The range in metres where the far sigma starts.
+    /// The range in metres where the far sigma starts; infinite when it
+    /// never does (JSON, which has no infinity, writes it `null`, and
+    /// `null` reads back as infinite).
+    #[cfg_attr(feature = "serde", serde(deserialize_with = "infinite_when_null"))]
     pub far_from_m: f64,
+}
+
+/// A number, or `null` for an infinite one (serde_json writes non-finite
+/// numbers as `null`).
+#[cfg(feature = "serde")]
+fn infinite_when_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    use serde::Deserialize;
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
 }
 
 impl RangeNoise {
