@@ -215,54 +215,74 @@ pub struct DetectionStats {
     pub range_step_m: f64,
 }
 
-/// Detection statistics of the detector of `config`, on `sensor`'s datasheet
-/// noise when given, on the log at `path` (named `log` in the report).
+/// Sums over the scans of one log for [`DetectionStats`].
+#[derive(Debug, Default)]
+struct StatsSums {
+    with_returns: usize,
+    without_line: usize,
+    lines: usize,
+    on_lines: usize,
+    valid: usize,
+    residuals: Vec<f64>,
+    noise: Vec<f64>,
+    steps: Vec<f64>,
+}
+
+impl StatsSums {
+    fn add(&mut self, d: &pcaline::Detection<'_>) {
+        if d.points.len() >= MIN_RETURNS_IN_VIEW {
+            self.with_returns += 1;
+            self.without_line += usize::from(d.lines.is_empty());
+        }
+        self.lines += d.lines.len();
+        self.valid += d.points.len();
+        self.on_lines += d.lines.iter().map(|l| l.line.n_points).sum::<usize>();
+        self.residuals.extend(d.lines.iter().map(|l| l.line.residual_std));
+        self.noise.extend(d.noise.map(|n| n.near_sigma_m));
+        self.steps.extend(d.noise_estimate.map(|e| e.range_step_m));
+    }
+
+    fn finish(mut self, log: &str, sensor: Option<SensorProfile>, scans: usize) -> DetectionStats {
+        for v in [&mut self.residuals, &mut self.noise, &mut self.steps] {
+            v.sort_by(f64::total_cmp);
+        }
+        let pick = |v: &[f64], q: f64| v.get(((v.len() as f64 - 1.0) * q) as usize).copied();
+        DetectionStats {
+            log: log.to_string(),
+            sensor: sensor.map(|s| s.name().to_string()),
+            scans,
+            scans_with_returns: self.with_returns,
+            scans_without_line: self.without_line,
+            lines_per_scan: self.lines as f64 / scans.max(1) as f64,
+            points_on_lines: self.on_lines as f64 / self.valid.max(1) as f64,
+            residual_std_p10_p50_p90_m: [0.1, 0.5, 0.9]
+                .map(|q| pick(&self.residuals, q).unwrap_or(f64::NAN)),
+            noise_used_median_m: pick(&self.noise, 0.5).unwrap_or(f64::NAN),
+            range_step_m: pick(&self.steps, 0.5).unwrap_or(0.0),
+        }
+    }
+}
+
+/// Detection statistics on the log at `path` (named `log` in the report),
+/// in one read: of the detector of `config` as it is, and on `sensor`'s
+/// datasheet noise.
 pub fn detection_stats(
     path: &Path,
     log: &str,
     config: &NamedConfig,
-    sensor: Option<SensorProfile>,
-) -> Result<DetectionStats> {
-    let mut detector = LineDetector::new(config.detector_for(sensor))?;
-    let (mut residuals, mut noise, mut steps) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut with_returns, mut without_line, mut lines, mut on_lines, mut valid) = (0, 0, 0, 0, 0);
+    sensor: SensorProfile,
+) -> Result<(DetectionStats, DetectionStats)> {
+    let mut plain = LineDetector::new(config.detector)?;
+    let mut profiled = LineDetector::new(config.detector_for(Some(sensor)))?;
+    let (mut a, mut b) = (StatsSums::default(), StatsSums::default());
     let scans = read_log(path, &LogOptions::default(), |record| {
         if let LogRecord::Scan(s) = record {
-            let d = detector.detect(&s.scan);
-            if d.points.len() >= MIN_RETURNS_IN_VIEW {
-                with_returns += 1;
-                without_line += usize::from(d.lines.is_empty());
-            }
-            lines += d.lines.len();
-            valid += d.points.len();
-            on_lines += d.lines.iter().map(|l| l.line.n_points).sum::<usize>();
-            residuals.extend(d.lines.iter().map(|l| l.line.residual_std));
-            if let Some(n) = d.noise {
-                noise.push(n.near_sigma_m);
-            }
-            if let Some(e) = d.noise_estimate {
-                steps.push(e.range_step_m);
-            }
+            a.add(&plain.detect(&s.scan));
+            b.add(&profiled.detect(&s.scan));
         }
         ControlFlow::Continue(())
     })?;
-    residuals.sort_by(f64::total_cmp);
-    noise.sort_by(f64::total_cmp);
-    steps.sort_by(f64::total_cmp);
-    let pick = |v: &[f64], q: f64| v.get(((v.len() as f64 - 1.0) * q) as usize).copied();
-    Ok(DetectionStats {
-        log: log.to_string(),
-        sensor: sensor.map(|s| s.name().to_string()),
-        scans,
-        scans_with_returns: with_returns,
-        scans_without_line: without_line,
-        lines_per_scan: lines as f64 / scans.max(1) as f64,
-        points_on_lines: on_lines as f64 / valid.max(1) as f64,
-        residual_std_p10_p50_p90_m: [0.1, 0.5, 0.9]
-            .map(|q| pick(&residuals, q).unwrap_or(f64::NAN)),
-        noise_used_median_m: pick(&noise, 0.5).unwrap_or(f64::NAN),
-        range_step_m: pick(&steps, 0.5).unwrap_or(0.0),
-    })
+    Ok((a.finish(log, None, scans), b.finish(log, Some(sensor), scans)))
 }
 
 /// Runs every real-data measurement on the datasets folder `data`.
@@ -270,6 +290,12 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
     let (csail_pairs, csail) = csail(data, config)?;
     let (intel, mut own_poses, drift_grid) = intel(data, seed, config, grid)?;
     own_poses.extend(csail_own(data, config)?);
+    let (detection, detection_with_sensor): (Vec<_>, Vec<_>) = DETECTION_LOGS
+        .iter()
+        .map(|(log, sensor)| detection_stats(&data.join(log), log, config, *sensor))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
     Ok(RealReport {
         config: config.name.clone(),
         csail_pairs,
@@ -279,14 +305,8 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
         drift_grid,
         intel_drift_seed: seed,
         utm: utm_residuals(&data.join("utm30lx-ros2"), config)?,
-        detection: DETECTION_LOGS
-            .iter()
-            .map(|(log, _)| detection_stats(&data.join(log), log, config, None))
-            .collect::<Result<_>>()?,
-        detection_with_sensor: DETECTION_LOGS
-            .iter()
-            .map(|(log, sensor)| detection_stats(&data.join(log), log, config, Some(*sensor)))
-            .collect::<Result<_>>()?,
+        detection,
+        detection_with_sensor,
     })
 }
 
