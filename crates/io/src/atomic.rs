@@ -1,9 +1,99 @@
 //! Atomic file output: write to a temporary file beside the target, then
 //! rename, so a failed or interrupted write never leaves a half-written file.
+//!
+//! [`AtomicFile`] is the streaming form (a writer that can also seek, for
+//! formats with a summary at the end such as MCAP); [`write_atomic`] and
+//! [`write_atomic_with`] are built on it.
 
 use crate::IoError;
-use std::io::Write;
-use std::path::Path;
+use std::fs::File;
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// A file being written atomically: every byte goes to a temporary file in
+/// the target's folder, and [`AtomicFile::commit`] flushes, syncs and renames
+/// it over the target. Dropped without a commit (an error, a panic, an early
+/// return), it removes the temporary file and leaves the target untouched.
+///
+/// Edge cases: the target's folder must exist and be writable (the error
+/// names the target); a target that is a directory fails at the rename, and
+/// the temporary file is removed.
+#[derive(Debug)]
+pub struct AtomicFile {
+    target: PathBuf,
+    tmp: PathBuf,
+    writer: Option<BufWriter<File>>,
+}
+
+impl AtomicFile {
+    /// Creates the temporary file for `target` (`.NAME.PID.tmp` beside it).
+    pub fn create(target: &Path) -> Result<Self, IoError> {
+        let dir = match target.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+        let file = File::create(&tmp).map_err(|e| IoError::io(target, e))?;
+        Ok(AtomicFile {
+            target: target.to_path_buf(),
+            tmp,
+            writer: Some(BufWriter::with_capacity(1 << 16, file)),
+        })
+    }
+
+    /// The path the file will have once committed.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Flushes, syncs and renames the temporary file over the target. On an
+    /// error the temporary file is removed.
+    pub fn commit(mut self) -> Result<(), IoError> {
+        let result = (|| {
+            let writer =
+                self.writer.take().ok_or_else(|| std::io::Error::other("already closed"))?;
+            let file = writer.into_inner().map_err(|e| e.into_error())?;
+            file.sync_all()?;
+            std::fs::rename(&self.tmp, &self.target)
+        })();
+        result.map_err(|e| IoError::io(&self.target, e))
+        // Drop removes the temporary file if the rename did not happen.
+    }
+
+    fn writer(&mut self) -> std::io::Result<&mut BufWriter<File>> {
+        self.writer.as_mut().ok_or_else(|| std::io::Error::other("already closed"))
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.writer()?.write(buf)
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        self.writer()?.write_all(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.writer()?.flush()
+    }
+}
+
+impl Seek for AtomicFile {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.writer()?.seek(pos)
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        // Still open: not committed. The rename moved the file otherwise,
+        // and removing a path that no longer exists is harmless.
+        self.writer.take();
+        let _ = std::fs::remove_file(&self.tmp);
+    }
+}
 
 /// Writes `bytes` to `path` atomically (temporary file in the same directory,
 /// flushed and synced, then renamed over the target).
@@ -17,24 +107,9 @@ pub fn write_atomic_with(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), IoError> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let file = std::fs::File::create(&tmp)?;
-        let mut w = std::io::BufWriter::new(file);
-        fill(&mut w)?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        IoError::io(path, e)
-    })
+    let mut file = AtomicFile::create(path)?;
+    fill(&mut file).map_err(|e| IoError::io(path, e))?;
+    file.commit()
 }
 
 #[cfg(test)]
@@ -56,5 +131,34 @@ mod tests {
         write_atomic(&target, b"{}").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"{}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn streaming_file_seeks_and_is_removed_unless_committed() {
+        let dir = std::env::temp_dir().join(format!("pcaline-atomic-seek-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("out.bin");
+        {
+            let mut f = AtomicFile::create(&target).unwrap();
+            f.write_all(b"abcdef").unwrap();
+            assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "only the temporary file");
+        }
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "dropped: removed");
+        let mut f = AtomicFile::create(&target).unwrap();
+        f.write_all(b"abcdef").unwrap();
+        f.seek(SeekFrom::Start(1)).unwrap();
+        f.write_all(b"X").unwrap();
+        assert!(!target.exists(), "nothing at the target before the commit");
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"aXcdef");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn unwritable_folder_names_the_target() {
+        let target = Path::new("/nonexistent-pcaline-folder/out.mcap");
+        let err = AtomicFile::create(target).unwrap_err();
+        assert!(err.to_string().contains("/nonexistent-pcaline-folder/out.mcap"), "{err}");
     }
 }

@@ -5,6 +5,7 @@ use pcaline_geometry::LineSegment;
 use pcaline_mapping::{LineMap, MapRecord};
 use serde::Serialize;
 use std::fmt::Write as _;
+use std::io::Write;
 use std::path::Path;
 
 /// The lines of one scan, in the sensor frame.
@@ -107,44 +108,137 @@ pub fn write_json<T: Serialize + ?Sized>(path: &Path, value: &T) -> Result<(), I
     write_atomic(path, &bytes)
 }
 
-/// Lines of many scans as pretty JSON.
-pub fn lines_to_json(scans: &[ScanLines]) -> String {
-    serde_json::to_string_pretty(scans).unwrap_or_else(|_| "[]".into()) + "\n"
+/// How [`LinesWriter`] writes the lines of a log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum LinesFormat {
+    /// A JSON array of [`ScanLines`], one scan per line of text (so the
+    /// output can also be read line by line).
+    Json,
+    /// CSV, one row per line, with a header row.
+    Csv,
 }
 
-/// Lines of many scans as CSV, one row per line.
-pub fn lines_to_csv(scans: &[ScanLines]) -> String {
-    let mut s = String::from(
-        "scan,position,stamp_s,alpha_rad,d_m,start_x,start_y,end_x,end_y,length_m,n_points,residual_std_m,first_beam,last_beam,residual_ratio,runs_z,bow_m\n",
-    );
-    let opt = |v: Option<u32>| v.map(|b| b.to_string()).unwrap_or_default();
-    let optf = |v: Option<f64>| v.map(|x| x.to_string()).unwrap_or_default();
-    for scan in scans {
-        for l in &scan.lines {
-            let _ = writeln!(
-                s,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                scan.scan,
-                scan.position,
-                scan.stamp_s.map(|t| t.to_string()).unwrap_or_default(),
-                l.alpha_rad,
-                l.d_m,
-                l.start[0],
-                l.start[1],
-                l.end[0],
-                l.end[1],
-                l.length_m,
-                l.n_points,
-                l.residual_std_m,
-                opt(l.first_beam),
-                opt(l.last_beam),
-                optf(l.residual_ratio),
-                optf(l.runs_z),
-                optf(l.bow_m)
-            );
+/// The CSV header of [`LinesFormat::Csv`].
+const LINES_CSV_HEADER: &str = "scan,position,stamp_s,alpha_rad,d_m,start_x,start_y,end_x,end_y,length_m,n_points,residual_std_m,first_beam,last_beam,residual_ratio,runs_z,bow_m\n";
+
+/// Streams the lines of a log, scan by scan, to a writer: memory does not
+/// grow with the log. [`LinesWriter::finish`] closes the JSON array; a
+/// writer dropped before it leaves the JSON unterminated (write to an
+/// [`crate::AtomicFile`] to leave nothing instead).
+///
+/// Edge cases: a log without scans is `[]` in JSON and the header alone in
+/// CSV; a non-finite value is `null` in JSON and empty in CSV.
+#[derive(Debug)]
+pub struct LinesWriter<W: Write> {
+    out: W,
+    format: LinesFormat,
+    scans: usize,
+}
+
+impl<W: Write> LinesWriter<W> {
+    /// Starts the output. Nothing is written before the first scan or
+    /// [`LinesWriter::finish`], so an output abandoned before either is empty.
+    pub fn new(out: W, format: LinesFormat) -> Self {
+        LinesWriter { out, format, scans: 0 }
+    }
+
+    fn start(&mut self) -> std::io::Result<()> {
+        match self.format {
+            LinesFormat::Json => self.out.write_all(b"["),
+            LinesFormat::Csv => self.out.write_all(LINES_CSV_HEADER.as_bytes()),
         }
     }
-    s
+
+    /// Writes one scan's lines.
+    pub fn write(&mut self, scan: &ScanLines) -> std::io::Result<()> {
+        if self.scans == 0 {
+            self.start()?;
+        }
+        match self.format {
+            LinesFormat::Json => {
+                self.out.write_all(if self.scans == 0 { b"\n" } else { b",\n" })?;
+                serde_json::to_writer(&mut self.out, scan).map_err(std::io::Error::other)?;
+            }
+            LinesFormat::Csv => write_csv_rows(&mut self.out, scan)?,
+        }
+        self.scans += 1;
+        Ok(())
+    }
+
+    /// Scans written so far.
+    pub fn scans(&self) -> usize {
+        self.scans
+    }
+
+    /// The writer.
+    pub fn get_ref(&self) -> &W {
+        &self.out
+    }
+
+    /// Ends the output (`]` in JSON), flushes, and returns the writer.
+    pub fn finish(mut self) -> std::io::Result<W> {
+        if self.scans == 0 {
+            self.start()?;
+        }
+        if self.format == LinesFormat::Json {
+            self.out.write_all(b"\n]\n")?;
+        }
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}
+
+/// Lines of many scans as JSON ([`LinesFormat::Json`]).
+pub fn lines_to_json(scans: &[ScanLines]) -> String {
+    lines_to_text(scans, LinesFormat::Json)
+}
+
+/// Lines of many scans as CSV, one row per line ([`LinesFormat::Csv`]).
+pub fn lines_to_csv(scans: &[ScanLines]) -> String {
+    lines_to_text(scans, LinesFormat::Csv)
+}
+
+fn lines_to_text(scans: &[ScanLines], format: LinesFormat) -> String {
+    let write = || -> std::io::Result<Vec<u8>> {
+        let mut w = LinesWriter::new(Vec::new(), format);
+        for s in scans {
+            w.write(s)?;
+        }
+        w.finish()
+    };
+    // Writing to memory cannot fail, and the records are valid UTF-8.
+    String::from_utf8(write().unwrap_or_default()).unwrap_or_default()
+}
+
+fn write_csv_rows(out: &mut impl Write, scan: &ScanLines) -> std::io::Result<()> {
+    let opt = |v: Option<u32>| v.map(|b| b.to_string()).unwrap_or_default();
+    let optf =
+        |v: Option<f64>| v.filter(|x| x.is_finite()).map(|x| x.to_string()).unwrap_or_default();
+    for l in &scan.lines {
+        writeln!(
+            out,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            scan.scan,
+            scan.position,
+            optf(scan.stamp_s),
+            l.alpha_rad,
+            l.d_m,
+            l.start[0],
+            l.start[1],
+            l.end[0],
+            l.end[1],
+            l.length_m,
+            l.n_points,
+            l.residual_std_m,
+            opt(l.first_beam),
+            opt(l.last_beam),
+            optf(l.residual_ratio),
+            optf(l.runs_z),
+            optf(l.bow_m)
+        )?;
+    }
+    Ok(())
 }
 
 /// Writes a map as JSON (the [`MapRecord`] form, loadable with [`read_map`]).
@@ -243,6 +337,41 @@ pub fn read_pose_series(path: &Path) -> Result<Vec<PoseSeries>, IoError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn scan_lines(scan: usize, lines: usize) -> ScanLines {
+        use pcaline_geometry::{Point2, Vector2};
+        let line = LineSegment::through(
+            Point2::new(1.0, 0.0),
+            Vector2::new(0.0, 1.0),
+            Point2::new(1.0, -1.0),
+            Point2::new(1.0, 1.0),
+        );
+        ScanLines {
+            scan,
+            position: scan + 1,
+            stamp_s: Some(scan as f64 * 0.025),
+            noise: None,
+            lines: (0..lines).map(|_| LineRecord::new(&line, Some((3, 12)))).collect(),
+        }
+    }
+
+    #[test]
+    fn streamed_lines_are_one_json_array_and_csv_rows() {
+        assert_eq!(lines_to_json(&[]), "[\n]\n");
+        let v: serde_json::Value = serde_json::from_str(&lines_to_json(&[])).unwrap();
+        assert_eq!(v, serde_json::json!([]));
+        let scans = [scan_lines(0, 2), scan_lines(1, 0), scan_lines(2, 1)];
+        let text = lines_to_json(&scans);
+        assert_eq!(text.lines().count(), 5, "one scan per line between the brackets");
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v.as_array().unwrap().len(), 3);
+        assert_eq!(v[0]["lines"].as_array().unwrap().len(), 2);
+        assert_eq!(v[2]["lines"][0]["first_beam"], 3);
+        let csv = lines_to_csv(&scans);
+        assert_eq!(csv.lines().count(), 1 + 3, "header and one row per line");
+        assert!(csv.lines().nth(3).unwrap().starts_with("2,3,0.05,"));
+        assert_eq!(lines_to_csv(&[]).lines().count(), 1);
+    }
 
     #[test]
     fn map_round_trip_and_csv() {
