@@ -1,6 +1,6 @@
 //! File formats for pcaline: scene files (TOML/JSON); logs of scans (CARMEN,
 //! ROS 1 bags, ROS 2 sqlite3 bags, MCAP, JSON, CSV) read by [`read_log`],
-//! streaming; relation files. Only this crate knows file formats. Every error
+//! streaming; relation files; Foxglove MCAP output ([`FoxgloveMcapWriter`]). Only this crate knows file formats. Every error
 //! names the file and, where it can, the line, message or item; every output
 //! is written atomically.
 //!
@@ -14,6 +14,7 @@
 mod atomic;
 mod carmen;
 mod error;
+mod foxglove_mcap;
 mod laserscan_codec;
 mod lines_file;
 mod log;
@@ -23,13 +24,17 @@ mod ros;
 mod scan_text;
 mod scene_file;
 
-pub use atomic::{write_atomic, write_atomic_with};
+pub use atomic::{AtomicFile, write_atomic, write_atomic_with};
 pub use carmen::{CarmenOptions, CarmenReader};
 pub use error::IoError;
+pub use foxglove_mcap::{
+    FRAME_SENSOR, FRAME_WORLD, FoxgloveMcapWriter, PoseKind, Stamp, Topic, TopicCounts,
+    foxglove_schema,
+};
 pub use laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1, encode_laserscan_cdr};
 pub use lines_file::{
-    LineRecord, NoiseRecord, PoseSeries, ScanLines, lines_to_csv, lines_to_json, read_map,
-    read_pose_series, write_json, write_map_csv, write_map_json,
+    LineRecord, LinesFormat, LinesWriter, NoiseRecord, PoseSeries, ScanLines, lines_to_csv,
+    lines_to_json, read_map, read_pose_series, write_json, write_map_csv, write_map_json,
 };
 pub use log::{LogFormat, LogOptions, read_log};
 pub use pcaline_geometry::Relation;
