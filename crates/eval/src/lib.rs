@@ -30,7 +30,9 @@ pub use detection_run::{
     surface_rms_m,
 };
 pub use fit_accuracy::{FitAccuracy, RangeBearingAccuracy, fit_accuracy, range_bearing_accuracy};
-pub use localization::{AidedRun, AidedScore, MAP_MAX_ANGLE_DEG, MAP_TOLERANCE_M};
+pub use localization::{
+    AidedRun, AidedScore, MAP_MAX_ANGLE_DEG, MAP_TOLERANCE_M, ObservedRunError, RunStep,
+};
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
 pub use relation_metric::{RelationErrors, StampedTrajectory, relation_errors};
 pub use reproduce::{

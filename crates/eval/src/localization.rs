@@ -28,6 +28,39 @@ pub struct AidedRun {
     pub visible: VisibleWalls,
 }
 
+/// What [`AidedRun::run_observed`] shows after each frame.
+#[derive(Debug, Clone, Copy)]
+#[non_exhaustive]
+pub struct RunStep<'a> {
+    /// The simulated frame.
+    pub frame: &'a SimFrame,
+    /// Its lines, in the sensor frame.
+    pub lines: &'a [SensorLine],
+    /// Each loop's pose after the frame, in the order of the modes.
+    pub poses: &'a [Pose2],
+    /// The loops, their maps as they are after the frame.
+    pub loops: &'a [Aiding],
+    /// The loop with loop closure, when there is one (its pose and map are
+    /// the online ones, before the run's last optimization).
+    pub loop_closing: Option<&'a LoopClosing>,
+}
+
+/// Why [`AidedRun::run_observed`] failed.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum ObservedRunError<E> {
+    /// A configuration is invalid.
+    Config(ConfigError),
+    /// The observer returned an error.
+    Stopped(E),
+}
+
+impl<E> From<ConfigError> for ObservedRunError<E> {
+    fn from(e: ConfigError) -> Self {
+        ObservedRunError::Config(e)
+    }
+}
+
 /// One loop's score.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AidedScore {
@@ -61,12 +94,33 @@ impl AidedRun {
         map: MapConfig,
         modes: &[AidingConfig],
         loop_closure: Option<(AidingConfig, LoopClosureConfig)>,
-        mut lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
+        lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
     ) -> Result<Self, ConfigError> {
+        let observe = |_: RunStep<'_>| Ok::<(), std::convert::Infallible>(());
+        Self::run_observed(sim, map, modes, loop_closure, lines_of, observe).map_err(|e| match e {
+            ObservedRunError::Config(c) => c,
+            ObservedRunError::Stopped(never) => match never {},
+        })
+    }
+
+    /// As [`AidedRun::run_with_loop_closure`], with `observe` called after
+    /// every frame with what the loops made of it ([`RunStep`]): to stream a
+    /// run as it goes. An error from `observe` stops the run and is returned
+    /// ([`ObservedRunError::Stopped`]).
+    pub fn run_observed<E>(
+        sim: &Simulator,
+        map: MapConfig,
+        modes: &[AidingConfig],
+        loop_closure: Option<(AidingConfig, LoopClosureConfig)>,
+        mut lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
+        mut observe: impl FnMut(RunStep<'_>) -> Result<(), E>,
+    ) -> Result<Self, ObservedRunError<E>> {
         let mut loops =
             modes.iter().map(|a| Aiding::new(*a, map)).collect::<Result<Vec<_>, _>>()?;
-        let mut loop_closing =
-            loop_closure.map(|(a, l)| LoopClosing::new(a, map, l)).transpose()?;
+        let mut loop_closing = loop_closure
+            .map(|(a, l)| LoopClosing::new(a, map, l))
+            .transpose()
+            .map_err(ObservedRunError::Config)?;
         let mut estimates: Vec<Vec<Pose2>> = modes.iter().map(|_| Vec::new()).collect();
         let mut visible = VisibleWalls::new(sim.world().walls(), 0.05);
         let mut last: Option<(f64, Pose2)> = None;
@@ -81,6 +135,15 @@ impl AidedRun {
             if let Some(l) = loop_closing.as_mut() {
                 l.step_at(frame.time_s, &frame.odometry_pose, &lines);
             }
+            let poses: Vec<Pose2> = estimates.iter().filter_map(|e| e.last().copied()).collect();
+            observe(RunStep {
+                frame: &frame,
+                lines: &lines,
+                poses: &poses,
+                loops: &loops,
+                loop_closing: loop_closing.as_ref(),
+            })
+            .map_err(ObservedRunError::Stopped)?;
             visible.observe(&frame);
         }
         if let Some(l) = loop_closing.as_mut() {
