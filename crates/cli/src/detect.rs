@@ -1,15 +1,19 @@
-//! `pcaline detect FILE`: the lines of every scan of a log or scan file.
+//! `pcaline detect FILE`: the lines of every scan of a log or scan file,
+//! streamed scan by scan to JSON or CSV (and to a Foxglove MCAP file with
+//! `--mcap`), so memory does not grow with the log.
 
 use crate::config_file::resolve;
-use crate::exit::BadInput;
+use crate::exit::{BadInput, stdout_error};
 use crate::log_args::LogArgs;
+use crate::mcap_out::McapOut;
 use crate::progress;
 use anyhow::Result;
 use pcaline::LineDetector;
 use pcaline_io::{
-    LineRecord, LogRecord, NoiseRecord, ScanLines, lines_to_csv, lines_to_json, read_log,
-    write_atomic,
+    AtomicFile, LineRecord, LinesFormat, LinesWriter, LogRecord, NoiseRecord, PoseKind, ScanLines,
+    read_log,
 };
+use std::io::{BufWriter, Write};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 
@@ -25,12 +29,57 @@ pub struct DetectArgs {
     /// --show-config`).
     #[arg(long, default_value = "default")]
     config: String,
-    /// Write CSV (one line per detected line) instead of JSON.
+    /// Write CSV (one line per detected line) instead of JSON (an array with
+    /// one scan per line of text).
     #[arg(long)]
     csv: bool,
     /// Output file; stdout when absent.
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Also write every scan and its lines to this MCAP file, for Foxglove
+    /// (topics /scan, /lines, /tf and /pose/source: see the README).
+    #[arg(long, value_name = "OUT.mcap")]
+    mcap: Option<PathBuf>,
+}
+
+/// Where the lines go: a file written atomically, or stdout.
+enum Sink {
+    File(AtomicFile),
+    Stdout(BufWriter<std::io::StdoutLock<'static>>),
+}
+
+impl Sink {
+    /// The error of a failed write, naming the file or stdout.
+    fn error(&self, e: std::io::Error) -> anyhow::Error {
+        match self {
+            Sink::File(f) => pcaline_io::IoError::io(f.target(), e).into(),
+            Sink::Stdout(_) => stdout_error(e),
+        }
+    }
+
+    /// Puts a file in place; stdout is already flushed.
+    fn commit(self) -> Result<()> {
+        if let Sink::File(f) = self {
+            f.commit()?;
+        }
+        Ok(())
+    }
+}
+
+impl Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Sink::File(f) => f.write(buf),
+            Sink::Stdout(s) => s.write(buf),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Sink::File(f) => f.flush(),
+            Sink::Stdout(s) => s.flush(),
+        }
+    }
 }
 
 /// Runs `pcaline detect`.
@@ -41,14 +90,22 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     let config = resolve(&args.config, 0.01)?;
     let sensor = args.log.sensor(&args.file, config.sensor)?;
     let mut detector = LineDetector::new(config.detector_for(sensor))?;
+    let mut mcap = McapOut::create(args.mcap.as_deref())?;
+    let sink = match &args.output {
+        Some(path) => Sink::File(AtomicFile::create(path)?),
+        None => Sink::Stdout(BufWriter::new(std::io::stdout().lock())),
+    };
+    let format = if args.csv { LinesFormat::Csv } else { LinesFormat::Json };
+    let mut out = LinesWriter::new(sink, format);
     let bar = progress::spinner("scans", quiet);
-    let mut out: Vec<ScanLines> = Vec::new();
-    let mut scan_index = 0;
+    let mut lines_total = 0usize;
+    let mut failed: Option<anyhow::Error> = None;
     read_log(&args.file, &args.log.options(), |record| {
-        if let LogRecord::Scan(s) = record {
-            let d = detector.detect(&s.scan);
-            out.push(ScanLines {
-                scan: scan_index,
+        let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
+        let d = detector.detect(&s.scan);
+        let scan =
+            ScanLines {
+                scan: out.scans(),
                 position: s.position,
                 stamp_s: s.scan.stamp_s,
                 noise: d.noise.map(|n| NoiseRecord {
@@ -67,21 +124,50 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
                             .with_straightness(s.residual_ratio, s.runs_z, s.bow_m)
                     })
                     .collect(),
-            });
-            scan_index += 1;
-            bar.inc(1);
+            };
+        lines_total += scan.lines.len();
+        if let Some(m) = mcap.as_mut() {
+            let stamp = m.stamp(s.scan.stamp_s);
+            let pose = [(PoseKind::SensorFromLog, s.pose.or(s.odometry))];
+            if let Err(e) = m.scan(stamp, &s.scan, d.lines.iter().map(|l| &l.line), &pose) {
+                failed = Some(e);
+                return ControlFlow::Break(());
+            }
         }
+        if let Err(e) = out.write(&scan) {
+            failed = Some(e.into());
+            return ControlFlow::Break(());
+        }
+        bar.inc(1);
         ControlFlow::Continue(())
     })?;
     bar.finish_and_clear();
-    let text = if args.csv { lines_to_csv(&out) } else { lines_to_json(&out) };
-    match &args.output {
-        Some(path) => write_atomic(path, text.as_bytes())?,
-        None => print!("{text}"),
+    if let Some(e) = failed {
+        // The file's own writer names it; a failed stdout names stdout.
+        return Err(match e.downcast::<std::io::Error>() {
+            Ok(io) => out_error(&out, io),
+            Err(other) => other,
+        });
+    }
+    let scans = out.scans();
+    if scans == 0 {
+        // Nothing is written: the temporary files are dropped.
+        return Err(BadInput(format!("{}: no scans", args.file.display())).into());
+    }
+    let sink = out.finish().map_err(|e| match &args.output {
+        Some(path) => pcaline_io::IoError::io(path, e).into(),
+        None => stdout_error(e),
+    })?;
+    sink.commit()?;
+    if let Some(m) = mcap {
+        m.finish(quiet)?;
     }
     if !quiet {
-        let lines: usize = out.iter().map(|s| s.lines.len()).sum();
-        eprintln!("{}: {} scans, {} lines", args.file.display(), out.len(), lines);
+        eprintln!("{}: {} scans, {} lines", args.file.display(), scans, lines_total);
     }
     Ok(())
+}
+
+fn out_error(out: &LinesWriter<Sink>, e: std::io::Error) -> anyhow::Error {
+    out.get_ref().error(e)
 }

@@ -15,6 +15,29 @@ impl std::fmt::Display for BadInput {
 
 impl std::error::Error for BadInput {}
 
+/// Standard output was closed by its reader (`pcaline detect log | head`):
+/// the command stops and exits 0 without a message, like ripgrep.
+#[derive(Debug)]
+pub struct StdoutClosed;
+
+impl std::fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("stdout closed")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+/// A failed write to standard output: [`StdoutClosed`] for a broken pipe,
+/// else an error that names stdout (exit 1).
+pub fn stdout_error(e: std::io::Error) -> anyhow::Error {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        StdoutClosed.into()
+    } else {
+        anyhow::anyhow!("writing to stdout: {e}")
+    }
+}
+
 /// The exit code for `err`: 2 when any cause is bad input (a reader's error
 /// about the input file, or a [`BadInput`]), 1 otherwise.
 pub fn code_for(err: &anyhow::Error) -> ExitCode {

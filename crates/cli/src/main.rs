@@ -16,6 +16,7 @@ mod eval_real;
 mod exit;
 mod log_args;
 mod map_cmd;
+mod mcap_out;
 mod picture;
 mod progress;
 mod reproduce;
@@ -106,6 +107,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(err) if err.is::<exit::StdoutClosed>() => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err:#}");
             exit::code_for(&err)

@@ -3,14 +3,15 @@
 
 use crate::exit::BadInput;
 use crate::log_args::LogArgs;
+use crate::mcap_out::McapOut;
 use crate::picture::write_svg_and_png;
 use crate::progress;
-use crate::svg::Plot;
+use crate::svg::{Mark, Plot};
 use anyhow::Result;
 use clap::ValueEnum;
 use pcaline::LineDetector;
 use pcaline::aiding::{AidingMode, EdgeKind, Localizer, LoopOutcome, SensorLine};
-use pcaline_io::{LogRecord, read_log, write_json, write_map_csv, write_map_json};
+use pcaline_io::{LogRecord, PoseKind, read_log, write_json, write_map_csv, write_map_json};
 use serde::Serialize;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -61,6 +62,11 @@ pub struct MapArgs {
     /// Also write the picture as PNG.
     #[arg(long)]
     png: bool,
+    /// Also write the log scan by scan to this MCAP file, for Foxglove:
+    /// scans, lines, the map as it grows, the source and corrected poses
+    /// (topics in the README).
+    #[arg(long, value_name = "OUT.mcap")]
+    mcap: Option<PathBuf>,
 }
 
 #[derive(Debug, Serialize)]
@@ -106,6 +112,8 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     let mut without_odometry = 0;
     let mut last_source: Option<(f64, pcaline::Pose2)> = None;
     let mut sharpness = pcaline_eval::OccupiedCells::new(0.05);
+    let mut mcap = McapOut::create(args.mcap.as_deref())?;
+    let mut failed: Option<anyhow::Error> = None;
     read_log(&args.log, &args.input.options(), |record| {
         let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
         lines.clear();
@@ -132,6 +140,17 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             }
         };
         sharpness.add(&s.scan, &pose);
+        if let Some(m) = mcap.as_mut() {
+            let stamp = m.stamp(s.scan.stamp_s);
+            let poses = [(PoseKind::Source, source), (PoseKind::Corrected, Some(pose))];
+            let written = m
+                .scan(stamp, &s.scan, lines.iter().map(|l| &l.line), &poses)
+                .and_then(|()| m.map_if_due(stamp, aiding.map()));
+            if let Err(e) = written {
+                failed = Some(e);
+                return ControlFlow::Break(());
+            }
+        }
         poses.push(PoseOut {
             scan: poses.len(),
             stamp_s: s.scan.stamp_s,
@@ -143,10 +162,20 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         ControlFlow::Continue(())
     })?;
     bar.finish_and_clear();
+    if let Some(e) = failed {
+        return Err(e);
+    }
     if poses.is_empty() {
         return Err(BadInput(format!("{}: no scans", args.log.display())).into());
     }
     let graph = finish(&mut aiding, &mut poses);
+    let mcap_path = match mcap {
+        Some(mut m) => {
+            m.final_map(aiding.map())?;
+            Some(m.finish(quiet)?)
+        }
+        None => None,
+    };
     std::fs::create_dir_all(&args.out)?;
     let map_path = args.out.join("map.json");
     write_map_json(&map_path, aiding.map())?;
@@ -198,7 +227,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         );
     }
     println!("{}\n{}\n{}", map_path.display(), map_csv.display(), traj_path.display());
-    if let Some(p) = graph_path {
+    for p in graph_path.iter().chain(&mcap_path) {
         println!("{}", p.display());
     }
     for p in pictures {
@@ -351,16 +380,16 @@ fn draw(
     let aided: Vec<[f64; 2]> = poses.iter().map(|p| [p.aided[0], p.aided[1]]).collect();
     plot.polyline(&source, "#1f77b4", 1.0, true);
     plot.polyline(&aided, "#9467bd", 1.5, false);
-    plot.legend("line map", "#d62728", false);
-    plot.legend("log odometry", "#1f77b4", false);
-    plot.legend("aided trajectory", "#9467bd", false);
+    plot.legend("line map", "#d62728", Mark::Line(1.5));
+    plot.legend("log odometry", "#1f77b4", Mark::Dashed(1.0));
+    plot.legend("aided trajectory", "#9467bd", Mark::Line(1.5));
     if let Some(g) = graph {
         for e in g.edges.iter().filter(|e| e.kind == "loop") {
             let (a, b) = (g.nodes[e.from].pose, g.nodes[e.to].pose);
             let colour = if e.active { "#2ca02c" } else { "#7f7f7f" };
             plot.line([a[0], a[1]], [b[0], b[1]], colour, 2.0);
         }
-        plot.legend("loop closure (grey: switched off)", "#2ca02c", false);
+        plot.legend("loop closure (grey: switched off)", "#2ca02c", Mark::Line(2.0));
     }
     plot.finish(&format!("{name}: line map and trajectory"))
 }

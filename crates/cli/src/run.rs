@@ -5,15 +5,18 @@
 //! pictures and JSON go to the output folder.
 
 use crate::exit::BadInput;
+use crate::mcap_out::McapOut;
 use crate::picture::write_svg_and_png;
 use crate::progress;
 use crate::scene_cmd::draw_scene;
-use crate::svg::Plot;
+use crate::svg::{Mark, Plot};
 use anyhow::{Context, Result};
 use pcaline::aiding::{Aiding, AidingConfig, AidingMode, SensorLine};
 use pcaline::{LineDetector, LineSegment, Pose2};
-use pcaline_eval::{AidedRun, AidedScore};
-use pcaline_io::{LineRecord, parse_scene, read_scene, write_json, write_map_csv, write_map_json};
+use pcaline_eval::{AidedRun, AidedScore, ObservedRunError, RunStep};
+use pcaline_io::{
+    LineRecord, PoseKind, parse_scene, read_scene, write_json, write_map_csv, write_map_json,
+};
 use pcaline_sim::{Scene, Simulator};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -45,6 +48,11 @@ pub struct RunArgs {
     /// Also write each picture as PNG.
     #[arg(long)]
     png: bool,
+    /// Also write the run scan by scan to this MCAP file, for Foxglove:
+    /// scans, lines, the map as it grows, odometry, corrected and true
+    /// poses, and the true walls (topics in the README).
+    #[arg(long, value_name = "OUT.mcap")]
+    mcap: Option<PathBuf>,
 }
 
 /// The loops compared: three aiding modes, then the estimator with loop
@@ -92,6 +100,10 @@ struct ScanRecord {
     lines: Vec<LineRecord>,
 }
 
+/// The true trajectory: thick and light, drawn under the estimates.
+const TRUTH_COLOUR: &str = "#a6dba0";
+const TRUTH_WIDTH: f64 = 6.0;
+
 fn pose_array(p: &Pose2) -> [f64; 3] {
     [p.x, p.y, p.heading]
 }
@@ -125,7 +137,29 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let mut detect_time = 0.0;
     let mut drawn: Vec<LineSegment> = Vec::new();
     let loop_closure = Some((config.aiding_in(AidingMode::Estimator), config.loop_closure));
-    let run = AidedRun::run_with_loop_closure(
+    let mut mcap = McapOut::create(args.mcap.as_deref())?;
+    if let Some(m) = mcap.as_mut() {
+        let walls: Vec<[[f64; 2]; 2]> =
+            sim.world().walls().iter().map(|w| [[w.a.x, w.a.y], [w.b.x, w.b.y]]).collect();
+        m.walls(&walls)?;
+    }
+    let observe = |step: RunStep<'_>| -> Result<()> {
+        let Some(m) = mcap.as_mut() else { return Ok(()) };
+        let f = step.frame;
+        let stamp = m.stamp(Some(f.time_s));
+        let corrected = step.loop_closing.and_then(|l| l.pose());
+        let poses = [
+            (PoseKind::Source, Some(f.odometry_pose)),
+            (PoseKind::Corrected, corrected),
+            (PoseKind::Truth, Some(f.true_pose)),
+        ];
+        m.scan(stamp, &f.scan, step.lines.iter().map(|l| &l.line), &poses)?;
+        match step.loop_closing {
+            Some(l) => m.map_if_due(stamp, l.map()),
+            None => Ok(()),
+        }
+    };
+    let run = AidedRun::run_observed(
         &sim,
         config.map,
         &aiding_configs,
@@ -159,7 +193,13 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
             bar.inc(1);
             sensor_lines
         },
-    )?;
+        observe,
+    )
+    .map_err(|e| match e {
+        ObservedRunError::Config(c) => anyhow::Error::from(c),
+        ObservedRunError::Stopped(e) => e,
+        _ => anyhow::anyhow!("the run stopped"),
+    })?;
     bar.finish_and_clear();
     let estimates = &run.estimates;
     for (k, record) in records.iter_mut().enumerate() {
@@ -190,6 +230,10 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating output folder {}", args.out.display()))?;
     let mut outputs = Vec::new();
+    if let Some(mut m) = mcap {
+        m.final_map(full.map())?;
+        outputs.push(m.finish(true)?.display().to_string());
+    }
     let scans_path = args.out.join("scans.json");
     write_json(&scans_path, &records)?;
     outputs.push(scans_path.display().to_string());
@@ -238,8 +282,8 @@ fn draw_detections(scene: &Scene, sim: &Simulator, drawn: &[LineSegment]) -> Str
     }
     let truth: Vec<[f64; 2]> = sim.true_poses().iter().map(|p| [p.x, p.y]).collect();
     plot.polyline(&truth, "#2ca02c", 1.0, false);
-    plot.legend("detected lines, every 20th scan", "#d62728", false);
-    plot.legend("true trajectory", "#2ca02c", false);
+    plot.legend("detected lines, every 20th scan", "#d62728", Mark::Line(2.0));
+    plot.legend("true trajectory", "#2ca02c", Mark::Line(1.0));
     plot.finish(&format!("{}: lines detected along the trajectory", scene.name))
 }
 
@@ -255,16 +299,18 @@ fn draw_map(scene: &Scene, sim: &Simulator, full: &Aiding, est: &[Vec<Pose2>]) -
         plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
     }
     let path = |poses: &[Pose2]| poses.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
+    // The truth thick and light underneath, so the aided line drawn thin on
+    // top of it stays visible where the two agree.
+    plot.polyline(&path(sim.true_poses()), TRUTH_COLOUR, TRUTH_WIDTH, false);
     plot.polyline(&path(sim.odometry_poses()), "#1f77b4", 1.5, true);
     plot.polyline(&path(&est[1]), "#ff7f0e", 1.5, false);
-    plot.polyline(&path(sim.true_poses()), "#2ca02c", 3.0, false);
-    plot.polyline(&path(&est[2]), "#9467bd", 1.5, false);
-    plot.legend("true walls", "#bbbbbb", false);
-    plot.legend("line map (estimator)", "#d62728", false);
-    plot.legend("odometry (unaided)", "#1f77b4", false);
-    plot.legend("heading-aided", "#ff7f0e", false);
-    plot.legend("true trajectory", "#2ca02c", false);
-    plot.legend("estimator", "#9467bd", false);
+    plot.polyline(&path(&est[2]), "#9467bd", 1.6, false);
+    plot.legend("true walls", "#bbbbbb", Mark::Line(5.0));
+    plot.legend("line map (estimator)", "#d62728", Mark::Line(2.0));
+    plot.legend("true trajectory", TRUTH_COLOUR, Mark::Line(TRUTH_WIDTH));
+    plot.legend("odometry (unaided)", "#1f77b4", Mark::Dashed(1.5));
+    plot.legend("heading-aided", "#ff7f0e", Mark::Line(1.5));
+    plot.legend("estimator", "#9467bd", Mark::Line(1.6));
     plot.finish(&format!("{}: line map and trajectories", scene.name))
 }
 
@@ -293,14 +339,14 @@ fn draw_heading(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
     let t_end = sim.len() as f64 * dt;
     let mut plot = Plot::chart([0.0, lo], [t_end, hi], 1000.0, 420.0, ["time (s)", "heading (°)"]);
     let styles = [
-        ("true", "#2ca02c", 3.0),
-        ("odometry (unaided)", "#1f77b4", 1.5),
-        ("heading-aided", "#ff7f0e", 1.5),
-        ("estimator", "#9467bd", 1.5),
+        ("true", TRUTH_COLOUR, TRUTH_WIDTH, false),
+        ("odometry (unaided)", "#1f77b4", 1.5, true),
+        ("heading-aided", "#ff7f0e", 1.5, false),
+        ("estimator", "#9467bd", 1.6, false),
     ];
-    for (s, (name, color, width)) in all.iter().zip(styles) {
-        plot.polyline(s, color, width, name.starts_with("odometry"));
-        plot.legend(name, color, false);
+    for (s, (name, color, width, dashed)) in all.iter().zip(styles) {
+        plot.polyline(s, color, width, dashed);
+        plot.legend(name, color, if dashed { Mark::Dashed(width) } else { Mark::Line(width) });
     }
     plot.finish("Heading over time, with and without aiding")
 }
@@ -332,7 +378,7 @@ fn draw_heading_error(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
         [("odometry (unaided)", "#1f77b4"), ("heading-aided", "#ff7f0e"), ("estimator", "#9467bd")];
     for (s, (name, color)) in all.iter().zip(styles) {
         plot.polyline(s, color, 1.5, false);
-        plot.legend(name, color, false);
+        plot.legend(name, color, Mark::Line(1.5));
     }
     plot.finish("Heading error against the truth")
 }

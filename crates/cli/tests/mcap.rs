@@ -1,0 +1,177 @@
+//! `--mcap` on `detect`, `map` and `run`: the file Foxglove opens, read back
+//! with the `mcap` crate; an unwritable path; a log of over a million scans
+//! streamed in constant memory.
+
+mod common;
+
+use common::{data, pcaline, s, small_maze, tmp};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+/// Messages per topic, from the file's summary, and one decoded message of
+/// each topic.
+fn read_back(path: &Path) -> (BTreeMap<String, u64>, BTreeMap<String, serde_json::Value>) {
+    let bytes = std::fs::read(path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary section");
+    let stats = summary.stats.expect("statistics");
+    let counts = summary
+        .channels
+        .values()
+        .map(|c| (c.topic.clone(), stats.channel_message_counts[&c.id]))
+        .collect();
+    let mut first = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        assert_eq!(m.channel.message_encoding, "json");
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        first.entry(m.channel.topic.clone()).or_insert(v);
+    }
+    (counts, first)
+}
+
+#[test]
+fn run_writes_every_topic_with_the_simulation_clock() {
+    let scene = small_maze("mcap-maze.toml", 5);
+    let (out, file) = (tmp("mcap-run"), tmp("run.mcap"));
+    let o = pcaline(&["--quiet", "run", s(&scene), "--out", s(&out), "--json", "--mcap", s(&file)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let scans = summary["scans"].as_u64().unwrap();
+    assert!(summary["outputs"].as_array().unwrap().iter().any(|p| p == s(&file)));
+    let (counts, first) = read_back(&file);
+    for topic in ["/scan", "/lines", "/pose/source", "/pose/corrected", "/truth/pose"] {
+        assert_eq!(counts[topic], scans, "{topic}");
+    }
+    assert_eq!(counts["/tf"], 3 * scans, "source, corrected and true frames");
+    assert_eq!(counts["/truth/walls"], 1);
+    let duration_s = summary["duration_s"].as_f64().unwrap();
+    // At most one map a second of simulated time, and the final one.
+    assert!(counts["/map"] >= 2 && counts["/map"] as f64 <= duration_s + 2.0, "{counts:?}");
+    assert_eq!(first["/scan"]["frame_id"], "sensor");
+    assert_eq!(first["/scan"]["timestamp"]["sec"], 0, "the simulation's clock starts at 0");
+    assert_eq!(first["/truth/walls"]["entities"][0]["frame_id"], "world");
+}
+
+#[test]
+fn detect_and_map_write_the_logs_own_timestamps() {
+    let Some(log) = data("intel/intel.gfs.log") else { return };
+    let file = tmp("intel-detect.mcap");
+    let o =
+        pcaline(&["--quiet", "detect", s(&log), "-o", s(&tmp("intel.json")), "--mcap", s(&file)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (counts, first) = read_back(&file);
+    let expected: BTreeMap<String, u64> =
+        [("/scan", 910), ("/lines", 910), ("/tf", 910), ("/pose/source", 910)]
+            .map(|(t, n)| (t.to_string(), n))
+            .into();
+    assert_eq!(counts, expected, "the 910 FLASER scans, each with the log's pose");
+    assert_eq!(first["/tf"]["child_frame_id"], "sensor", "scans follow the log's pose");
+    let lines = first["/lines"]["entities"].as_array().unwrap();
+    assert!(!lines.is_empty());
+    let keys: Vec<&str> = lines[0]["metadata"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|kv| kv["key"].as_str().unwrap())
+        .collect();
+    assert!(keys.contains(&"id") && keys.contains(&"n_points"), "{keys:?}");
+
+    let (out, file) = (tmp("intel-map"), tmp("intel-map.mcap"));
+    let o = pcaline(&["--quiet", "map", s(&log), "--out", s(&out), "--mcap", s(&file)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).lines().any(|l| l == s(&file)));
+    let (counts, first) = read_back(&file);
+    assert_eq!(counts["/scan"], 910);
+    assert_eq!(counts["/pose/corrected"], 910);
+    assert_eq!(counts["/tf"], 2 * 910, "source and corrected frames");
+    assert!(counts["/map"] > 100, "the map as it grows: {counts:?}");
+    let map = &first["/map"]["entities"];
+    let statuses: Vec<&str> =
+        map.as_array().unwrap().iter().map(|e| e["id"].as_str().unwrap()).collect();
+    assert_eq!(statuses, ["map-confirmed", "map-tentative", "map-not-straight"]);
+    // The log's own clock (seconds after its start), not a made-up one.
+    let t = &first["/scan"]["timestamp"];
+    let t0_s = t["sec"].as_f64().unwrap() + 1e-9 * t["nsec"].as_f64().unwrap();
+    assert!(t0_s > 0.0, "{t}");
+}
+
+#[test]
+fn an_unwritable_mcap_path_is_an_error_naming_it_with_nothing_left_behind() {
+    let scene = small_maze("mcap-bad-maze.toml", 6);
+    let dir = tmp("mcap-unwritable");
+    std::fs::create_dir_all(&dir).unwrap();
+    let target = dir.join("no-such-folder").join("x.mcap");
+    let json = dir.join("lines.json");
+    let o = pcaline(&["run", s(&scene), "--out", s(&dir.join("out")), "--mcap", s(&target)]);
+    assert_eq!(o.status.code(), Some(2), "a missing folder is bad input");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(s(&target)), "{err}");
+    let scan = tmp("mcap-bad.json");
+    std::fs::write(
+        &scan,
+        r#"{"angle_min": -0.5, "angle_increment": 0.01, "range_min": 0.1, "range_max": 30.0, "ranges": [2.0, 2.0, 2.0]}"#,
+    )
+    .unwrap();
+    let o = pcaline(&["detect", s(&scan), "-o", s(&json), "--mcap", s(&target)]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains(s(&target)));
+    assert!(!json.exists(), "no lines file either");
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(left.iter().all(|n| n == "out"), "nothing left behind: {left:?}");
+}
+
+/// Peak resident memory (VmHWM) of a running child, polled until it exits.
+fn run_measuring_peak_kb(mut cmd: Command) -> (std::process::ExitStatus, u64, String) {
+    let mut child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let status_path = format!("/proc/{}/status", child.id());
+    let mut peak_kb = 0;
+    let status = loop {
+        if let Ok(text) = std::fs::read_to_string(&status_path) {
+            if let Some(kb) = text
+                .lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+            {
+                peak_kb = peak_kb.max(kb);
+            }
+        }
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    (status, peak_kb, stderr)
+}
+
+#[test]
+fn a_log_of_over_a_million_scans_streams_in_constant_memory() {
+    const SCANS: usize = 1_000_001;
+    // A generated CARMEN log: three beams on a wall 2 m ahead, the pose
+    // moving along x.
+    let log = tmp("million.clf");
+    {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(&log).unwrap());
+        for k in 0..SCANS {
+            let (t, x) = (k as f64 * 0.025, k as f64 * 1e-3);
+            writeln!(w, "FLASER 3 2.0 2.0 2.0 {x:.3} 0 0 {x:.3} 0 0 {t:.3} gen {t:.3}").unwrap();
+        }
+    }
+    let file = tmp("million.mcap");
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_pcaline"));
+    cmd.args(["detect", s(&log), "--fov", "2", "--mcap", s(&file)]);
+    let (status, peak_kb, stderr) = run_measuring_peak_kb(cmd);
+    assert!(status.success(), "{stderr}");
+    assert!(stderr.contains(&format!("{SCANS} scans")), "{stderr}");
+    // Holding a million scans, or their lines, would take hundreds of MB;
+    // streamed, the process stays near its size for one scan.
+    assert!(peak_kb > 0 && peak_kb < 64 * 1024, "peak {peak_kb} kB");
+    let bytes = std::fs::read(&file).unwrap();
+    let stats = mcap::Summary::read(&bytes).unwrap().unwrap().stats.unwrap();
+    assert_eq!(stats.message_count, 4 * SCANS as u64, "scan, lines, /tf, pose per scan");
+    std::fs::remove_file(&log).unwrap();
+    std::fs::remove_file(&file).unwrap();
+}
