@@ -3,8 +3,8 @@
 
 use crate::exit::BadInput;
 use crate::log_args::LogArgs;
-use crate::picture::write_picture;
-use crate::svg::Plot;
+use crate::picture::{PictureFormat, write_picture};
+use crate::svg::{Mark, Plot};
 use anyhow::Result;
 use clap::Subcommand;
 use pcaline::LineDetector;
@@ -27,7 +27,7 @@ pub enum DrawCommand {
         /// A trajectory file.
         #[arg(long)]
         trajectory: Option<PathBuf>,
-        /// Output picture: SVG, or PNG when the name ends in `.png`.
+        /// Output picture: `.svg`, or `.png` (other extensions are refused).
         #[arg(short, long)]
         output: PathBuf,
     },
@@ -35,7 +35,7 @@ pub enum DrawCommand {
     Heading {
         /// A trajectory file (scans.json of `run`, trajectory.json of `map`).
         trajectory: PathBuf,
-        /// Output picture: SVG, or PNG when the name ends in `.png`.
+        /// Output picture: `.svg`, or `.png` (other extensions are refused).
         #[arg(short, long)]
         output: PathBuf,
     },
@@ -75,11 +75,11 @@ fn draw_map(
         let l = &m.line;
         plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
     }
-    plot.legend(&format!("line map ({} lines)", map.len()), "#d62728", false);
+    plot.legend(&format!("line map ({} lines)", map.len()), "#d62728", Mark::Line(2.0));
     for ((name, s), colour) in series.iter().zip(SERIES_COLOURS.iter().cycle()) {
         let pts: Vec<[f64; 2]> = s.iter().flatten().map(|p| [p.x, p.y]).collect();
         plot.polyline(&pts, colour, 1.5, false);
-        plot.legend(name, colour, false);
+        plot.legend(name, colour, Mark::Line(1.5));
     }
     write_picture(output, &plot.finish("Line map and trajectories"))
 }
@@ -114,7 +114,7 @@ fn draw_heading(trajectory: &std::path::Path, output: &std::path::Path) -> Resul
         Plot::chart([0.0, lo], [n.max(1) as f64, hi], 1000.0, 420.0, ["scan", "heading (°)"]);
     for ((name, s), colour) in unwrapped.iter().zip(SERIES_COLOURS.iter().cycle()) {
         plot.polyline(s, colour, 1.5, false);
-        plot.legend(name, colour, false);
+        plot.legend(name, colour, Mark::Line(1.5));
     }
     write_picture(output, &plot.finish("Heading over time"))
 }
@@ -132,7 +132,7 @@ pub struct ScanArgs {
     /// Detector: a preset or a configuration file (as `pcaline detect`).
     #[arg(long, default_value = "default")]
     config: String,
-    /// Output picture: SVG, or PNG when the name ends in `.png`.
+    /// Output picture: `.svg`, or `.png` (other extensions are refused).
     #[arg(short, long)]
     output: PathBuf,
 }
@@ -141,6 +141,11 @@ const PALETTE: [&str; 6] = ["#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b
 
 /// Runs `pcaline draw`.
 pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
+    // An unsupported picture format is refused before any reading.
+    let (DrawCommand::Scan(ScanArgs { output, .. })
+    | DrawCommand::Map { output, .. }
+    | DrawCommand::Heading { output, .. }) = cmd;
+    PictureFormat::of(output)?;
     let args = match cmd {
         DrawCommand::Scan(args) => args,
         DrawCommand::Map { map, trajectory, output } => {
@@ -203,11 +208,14 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
         let s = &l.line;
         plot.line([s.start.x, s.start.y], [s.end.x, s.end.y], "#d62728", 2.5);
     }
-    plot.dots(&[[0.0, 0.0]], "#000000", 4.0);
-    plot.legend("points (colour: level-1 cluster)", "#1f77b4", true);
-    plot.legend("level-1 break-points", "#000000", true);
-    plot.legend("level-2 break-points", "#d62728", true);
-    plot.legend("fitted lines", "#d62728", false);
+    // The sensor: a triangle along its x axis, not a dot that reads as a
+    // point or a break-point.
+    plot.sensor([0.0, 0.0], 0.0, "#444444");
+    plot.legend("points (colour: level-1 cluster)", "#1f77b4", Mark::Dot);
+    plot.legend("level-1 break-points", "#000000", Mark::Ring);
+    plot.legend("level-2 break-points", "#d62728", Mark::Ring);
+    plot.legend("fitted lines", "#d62728", Mark::Line(2.5));
+    plot.legend("sensor (origin, facing x)", "#444444", Mark::Sensor);
     let title = format!(
         "{} scan {}: {} points, {} clusters, {} lines",
         args.file.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),

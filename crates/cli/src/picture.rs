@@ -1,6 +1,7 @@
 //! Writing pictures: SVG always, PNG where asked (rendered from the SVG with
 //! resvg, text in the system's sans-serif font).
 
+use crate::exit::BadInput;
 use anyhow::{Context, Result};
 use pcaline_io::write_atomic;
 use resvg::{tiny_skia, usvg};
@@ -36,13 +37,39 @@ pub fn svg_to_png(svg: &str) -> Result<Vec<u8>> {
     pixmap.encode_png().context("encoding the PNG")
 }
 
-/// Writes `svg` to `path` (atomically): as PNG when the path ends in `.png`,
-/// else as SVG.
+/// The picture formats `-o` takes, by extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PictureFormat {
+    /// `.svg`
+    Svg,
+    /// `.png`, rendered from the SVG.
+    Png,
+}
+
+impl PictureFormat {
+    /// The format `path` names by its extension (any case); an error that
+    /// names the path and the supported extensions otherwise, before any
+    /// work is done.
+    pub fn of(path: &Path) -> Result<Self> {
+        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("svg") => Ok(PictureFormat::Svg),
+            Some("png") => Ok(PictureFormat::Png),
+            _ => Err(BadInput(format!(
+                "{}: unsupported picture format (supported: .svg, .png)",
+                path.display()
+            ))
+            .into()),
+        }
+    }
+}
+
+/// Writes `svg` to `path` (atomically), as SVG or PNG by the extension
+/// ([`PictureFormat::of`]).
 pub fn write_picture(path: &Path, svg: &str) -> Result<()> {
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        write_atomic(path, &svg_to_png(svg)?)?;
-    } else {
-        write_atomic(path, svg.as_bytes())?;
+    match PictureFormat::of(path)? {
+        PictureFormat::Png => write_atomic(path, &svg_to_png(svg)?)?,
+        PictureFormat::Svg => write_atomic(path, svg.as_bytes())?,
     }
     Ok(())
 }
@@ -69,5 +96,15 @@ mod tests {
         let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="20" height="10"><rect width="20" height="10" fill="red"/></svg>"#;
         let png = svg_to_png(svg).unwrap();
         assert!(png.starts_with(b"\x89PNG"));
+    }
+
+    #[test]
+    fn picture_formats_by_extension() {
+        assert_eq!(PictureFormat::of(Path::new("a/b.SVG")).unwrap(), PictureFormat::Svg);
+        assert_eq!(PictureFormat::of(Path::new("b.png")).unwrap(), PictureFormat::Png);
+        for bad in ["x.pdf", "x", "x.svg.gz"] {
+            let e = PictureFormat::of(Path::new(bad)).unwrap_err().to_string();
+            assert!(e.contains(bad) && e.contains(".svg, .png"), "{e}");
+        }
     }
 }

@@ -1,7 +1,7 @@
 //! `pcaline scene generate|check|draw`.
 
 use crate::exit::BadInput;
-use crate::svg::Plot;
+use crate::svg::{Mark, Plot};
 use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
 use pcaline_io::{read_scene, write_scene};
@@ -144,6 +144,7 @@ pub fn run(cmd: &SceneCommand, quiet: bool) -> Result<()> {
             Ok(())
         }
         SceneCommand::Draw { file, output } => {
+            crate::picture::PictureFormat::of(output)?;
             let scene = read_scene(file)?;
             let svg = draw_scene(&scene, None).finish(&format!("Scene \"{}\"", scene.name));
             crate::picture::write_picture(output, &svg)
@@ -170,7 +171,7 @@ pub fn draw_scene(scene: &Scene, extra_bounds: Option<([f64; 2], [f64; 2])>) -> 
     path.extend(t.waypoints.iter().copied());
     plot.polyline(&path, "#1f77b4", 1.5, true);
     plot.label([t.start.x, t.start.y], "start", "#1f77b4");
-    plot.legend("walls and obstacles", "#222", false);
-    plot.legend("planned path", "#1f77b4", false);
+    plot.legend("walls and obstacles", "#222", Mark::Line(2.0));
+    plot.legend("planned path", "#1f77b4", Mark::Dashed(1.5));
     plot
 }

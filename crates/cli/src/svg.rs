@@ -14,7 +14,23 @@ pub struct Plot {
     height: f64,
     labels: [String; 2],
     body: String,
-    legend: Vec<(String, String, bool)>,
+    legend: Vec<(String, String, Mark)>,
+}
+
+/// How a legend entry is drawn: the same mark as the data it names, so a
+/// dashed line has a dashed swatch and rings have a ring.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mark {
+    /// A solid line this wide, pixels.
+    Line(f64),
+    /// A dashed line this wide, pixels ([`Plot::polyline`] with `dashed`).
+    Dashed(f64),
+    /// A filled dot ([`Plot::dots`]).
+    Dot,
+    /// An open ring ([`Plot::rings`]).
+    Ring,
+    /// The sensor's triangle ([`Plot::sensor`]).
+    Sensor,
 }
 
 /// Width of the legend column, pixels.
@@ -127,6 +143,14 @@ impl Plot {
         }
     }
 
+    /// The sensor at `at`, a triangle pointing along its heading
+    /// (`heading_rad`, counter-clockwise from x): not a dot, so it cannot be
+    /// taken for a point or a break-point.
+    pub fn sensor(&mut self, at: [f64; 2], heading_rad: f64, color: &str) {
+        let (x, y) = self.px(at);
+        let _ = writeln!(self.body, "{}", triangle(x, y, heading_rad, 13.0, color));
+    }
+
     /// Text at a world position.
     pub fn label(&mut self, at: [f64; 2], text: &str, color: &str) {
         let (x, y) = self.px(at);
@@ -137,9 +161,9 @@ impl Plot {
         );
     }
 
-    /// Adds a legend entry (a line sample, or a dot when `dot`).
-    pub fn legend(&mut self, text: &str, color: &str, dot: bool) {
-        self.legend.push((text.to_string(), color.to_string(), dot));
+    /// Adds a legend entry drawn with `mark`.
+    pub fn legend(&mut self, text: &str, color: &str, mark: Mark) {
+        self.legend.push((text.to_string(), color.to_string(), mark));
     }
 
     /// The finished document with a title, axes in metres and the legend.
@@ -211,23 +235,25 @@ impl Plot {
         // Legend, right of the frame.
         let lx = x1 + 25.0;
         let mut ly = y1 + 18.0;
-        for (text, color, dot) in &self.legend {
-            if *dot {
-                let _ = writeln!(
-                    out,
-                    r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{color}"/>"#,
-                    lx + 10.0,
-                    ly - 4.0
-                );
-            } else {
-                let _ = writeln!(
-                    out,
-                    r#"<line x1="{lx:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{color}" stroke-width="3"/>"#,
-                    ly - 4.0,
+        for (text, color, mark) in &self.legend {
+            let (cx, cy) = (lx + 11.0, ly - 4.0);
+            let swatch = |width: f64, dash: &str| {
+                format!(
+                    r#"<line x1="{lx:.1}" y1="{cy:.1}" x2="{:.1}" y2="{cy:.1}" stroke="{color}" stroke-width="{:.1}"{dash}/>"#,
                     lx + 22.0,
-                    ly - 4.0
-                );
-            }
+                    width.clamp(1.5, 8.0)
+                )
+            };
+            let sample = match mark {
+                Mark::Line(w) => swatch(*w, ""),
+                Mark::Dashed(w) => swatch(*w, r#" stroke-dasharray="6,4""#),
+                Mark::Dot => format!(r#"<circle cx="{cx:.1}" cy="{cy:.1}" r="3" fill="{color}"/>"#),
+                Mark::Ring => format!(
+                    r#"<circle cx="{cx:.1}" cy="{cy:.1}" r="4" fill="none" stroke="{color}" stroke-width="1.5"/>"#
+                ),
+                Mark::Sensor => triangle(cx, cy, 0.0, 9.0, color),
+            };
+            let _ = writeln!(out, "{sample}");
             let _ = writeln!(
                 out,
                 r#"<text x="{:.1}" y="{ly:.1}" font-size="13" font-family="sans-serif">{}</text>"#,
@@ -239,6 +265,21 @@ impl Plot {
         out.push_str("</svg>\n");
         out
     }
+}
+
+/// A filled triangle centred at pixel (x, y), `size` long, pointing along
+/// `heading_rad` (y up in the world, so down in pixels).
+fn triangle(x: f64, y: f64, heading_rad: f64, size: f64, color: &str) -> String {
+    let corner = |angle: f64, r: f64| {
+        let a = heading_rad + angle;
+        format!("{:.1},{:.1}", x + r * a.cos(), y - r * a.sin())
+    };
+    format!(
+        r#"<polygon points="{} {} {}" fill="{color}" stroke="white" stroke-width="1"/>"#,
+        corner(0.0, size),
+        corner(2.5, 0.7 * size),
+        corner(-2.5, 0.7 * size)
+    )
 }
 
 fn nice_step(raw: f64) -> f64 {
@@ -275,13 +316,30 @@ mod tests {
         assert!(p.finish("c").contains("heading (°)"));
         let mut p = Plot::new([0.0, 0.0], [10.0, 5.0], 800.0);
         p.line([0.0, 0.0], [10.0, 5.0], "black", 2.0);
-        p.legend("walls <true>", "black", false);
+        p.legend("walls <true>", "black", Mark::Line(2.0));
         let s = p.finish("t & t");
         assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
         assert!(s.contains("walls &lt;true&gt;") && s.contains("t &amp; t"));
         assert_eq!(nice_step(1.3), 1.0);
         assert_eq!(nice_step(2.6), 2.0);
         assert_eq!(nice_step(0.06), 0.05);
+    }
+
+    #[test]
+    fn legend_swatches_look_like_their_data() {
+        let mut p = Plot::new([0.0, 0.0], [10.0, 5.0], 800.0);
+        p.legend("odometry", "#1f77b4", Mark::Dashed(1.5));
+        p.legend("truth", "#98df8a", Mark::Line(7.0));
+        p.legend("break-points", "#d62728", Mark::Ring);
+        p.legend("sensor", "#000", Mark::Sensor);
+        let s = p.finish("legend");
+        let dashed = s.lines().find(|l| l.contains("#1f77b4")).unwrap();
+        assert!(dashed.contains("stroke-dasharray"), "{dashed}");
+        let thick = s.lines().find(|l| l.contains("#98df8a")).unwrap();
+        assert!(thick.contains(r#"stroke-width="7.0""#), "{thick}");
+        let ring = s.lines().find(|l| l.contains("#d62728")).unwrap();
+        assert!(ring.contains(r#"fill="none""#), "{ring}");
+        assert!(s.lines().any(|l| l.starts_with("<polygon") && l.contains("#000")));
     }
 
     #[test]
