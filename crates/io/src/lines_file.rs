@@ -158,7 +158,8 @@ impl<W: Write> LinesWriter<W> {
         match self.format {
             LinesFormat::Json => {
                 self.out.write_all(if self.scans == 0 { b"\n" } else { b",\n" })?;
-                serde_json::to_writer(&mut self.out, scan).map_err(std::io::Error::other)?;
+                // serde_json keeps the kind of a failed write (a broken pipe stays one).
+                serde_json::to_writer(&mut self.out, scan).map_err(std::io::Error::from)?;
             }
             LinesFormat::Csv => write_csv_rows(&mut self.out, scan)?,
         }
