@@ -94,6 +94,19 @@ impl<R: BufRead> CarmenReader<R> {
         ))
     }
 
+    /// `fields` must be exactly `expected` long: a count that does not match
+    /// its line would shift the pose, odometry and stamp into the wrong
+    /// columns.
+    fn exact(&self, fields: &[&str], expected: usize, layout: &str) -> Result<(), IoError> {
+        if fields.len() == expected {
+            return Ok(());
+        }
+        Err(self.err(format!(
+            "{} fields after the message name, expected {expected} ({layout})",
+            fields.len()
+        )))
+    }
+
     fn count(&self, fields: &[&str], i: usize, what: &str) -> Result<usize, IoError> {
         let v = self.num(fields, i, what)?;
         if v < 0.0 || v.fract() != 0.0 || v > 1e6 {
@@ -136,6 +149,14 @@ impl<R: BufRead> CarmenReader<R> {
                 }
             },
         };
+        self.exact(
+            f,
+            n + 10,
+            &format!(
+                "FLASER {n} ranges x y theta odom_x odom_y odom_theta ipc_timestamp hostname \
+                 logger_timestamp"
+            ),
+        )?;
         let scan = Scan::new(
             angle_min as f32,
             increment as f32,
@@ -174,6 +195,15 @@ impl<R: BufRead> CarmenReader<R> {
         let laser = self.pose(f, p, "laser")?;
         let robot = self.pose(f, p + 3, "robot")?;
         let stamp = self.num(f, p + 11, "ipc_timestamp")? + self.options.time_offset_s;
+        self.exact(
+            f,
+            n + m + 23,
+            &format!(
+                "ROBOTLASER1 with {n} ranges and {m} remissions: 7 header fields, the counts, \
+                 laser and robot poses, 5 velocities and safety fields, ipc_timestamp hostname \
+                 logger_timestamp"
+            ),
+        )?;
         let scan = Scan::new(start as f32, res as f32, 0.0, max as f32, ranges).with_stamp(stamp);
         Ok(LogRecord::Scan(ScanRecord {
             scan,
@@ -187,6 +217,7 @@ impl<R: BufRead> CarmenReader<R> {
     fn odom(&self, f: &[&str]) -> Result<LogRecord, IoError> {
         let pose = self.pose(f, 0, "")?;
         let stamp = self.num(f, 6, "ipc_timestamp")? + self.options.time_offset_s;
+        self.exact(f, 9, "ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp")?;
         Ok(LogRecord::Odometry(OdometryRecord { pose, stamp_s: stamp, position: self.line_no }))
     }
 }
@@ -296,5 +327,28 @@ mod tests {
         assert!(e.contains("ambiguous"), "{e}");
         let ok = read(&line, CarmenOptions { fov_rad: Some(PI), ..Default::default() });
         assert!(ok[0].is_ok());
+    }
+
+    /// A count that does not match its line would read the pose, odometry
+    /// and stamp from the wrong columns: extra or missing fields are errors.
+    #[test]
+    fn field_counts_must_match_the_message() {
+        let flaser = |n: usize, extra: &str| {
+            format!("FLASER {n}{} 1 2 0.5 1.1 2.1 0.6 12.5 host 12.6{extra}\n", " 2.5".repeat(n))
+        };
+        assert!(read(&flaser(180, ""), CarmenOptions::default())[0].is_ok());
+        // One range too many, read as a count of 180: everything shifts.
+        let shifted = flaser(181, "").replacen("FLASER 181", "FLASER 180", 1);
+        let e = read(&shifted, CarmenOptions::default()).remove(0).unwrap_err().to_string();
+        assert!(e.starts_with("t.clf:1: 191 fields after the message name, expected 190"), "{e}");
+        let e = read(&flaser(180, " 7"), CarmenOptions::default()).remove(0).unwrap_err();
+        assert!(e.to_string().contains("expected 190"), "{e}");
+        let short = "FLASER 2 1 1 0 0 0 0 0 0 5.0\n";
+        let o = CarmenOptions { fov_rad: Some(1.0), ..Default::default() };
+        assert!(read(short, o).remove(0).unwrap_err().to_string().contains("expected 12"));
+        let e = read("ODOM 1 2 0.1 0 0 0 3.0 host 3.0 extra\n", CarmenOptions::default())
+            .remove(0)
+            .unwrap_err();
+        assert!(e.to_string().contains("expected 9"), "{e}");
     }
 }

@@ -36,7 +36,7 @@ pub use lines_file::{
     LineRecord, LinesFormat, LinesWriter, NoiseRecord, PoseSeries, ScanLines, lines_to_csv,
     lines_to_json, read_map, read_pose_series, write_json, write_map_csv, write_map_json,
 };
-pub use log::{LogFormat, LogOptions, read_log};
+pub use log::{LogFormat, LogOptions, MAX_COORDINATE_M, check_record, check_scan_header, read_log};
 pub use pcaline_geometry::Relation;
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
 pub use relations::{ScanPair, read_relations, read_scan_pairs};

@@ -80,6 +80,13 @@ impl LogFormat {
 /// Reads the log at `path`, calling `visit` for each record in order until
 /// it returns `ControlFlow::Break`. Returns the number of scans read. Every
 /// format streams except a JSON file whose top level is an array.
+///
+/// Every record is checked before `visit` sees it ([`check_record`]): a scan
+/// whose header cannot be right (angles not finite or spanning more than a
+/// turn, a zero increment, `range_max` not above `range_min`), or a stamp or
+/// pose that is not finite or lies beyond [`MAX_COORDINATE_M`], is an error
+/// naming the file and the line or scan. Ranges themselves are data: NaN,
+/// infinite or out-of-range values are invalid returns, never errors.
 pub fn read_log(
     path: &Path,
     options: &LogOptions,
@@ -89,6 +96,99 @@ pub fn read_log(
         Some(f) => f,
         None => LogFormat::detect(path)?,
     };
+    let mut invalid: Option<IoError> = None;
+    let mut checked = |record: LogRecord| match check_record(&record) {
+        Ok(()) => visit(record),
+        Err(message) => {
+            let position = match &record {
+                LogRecord::Scan(s) => s.position,
+                LogRecord::Odometry(o) => o.position,
+            };
+            invalid = Some(match format {
+                // Positions are line numbers in the text formats.
+                LogFormat::Carmen | LogFormat::Csv => IoError::parse(path, Some(position), message),
+                _ => IoError::parse(path, None, format!("scan {position}: {message}")),
+            });
+            ControlFlow::Break(())
+        }
+    };
+    let count = read_format(path, format, options, &mut checked)?;
+    match invalid {
+        Some(e) => Err(e),
+        None => Ok(count),
+    }
+}
+
+/// Poses and positions beyond this, metres, are refused: no log of a
+/// building, a city or a continent reaches them, and drawing or mapping
+/// them would take unbounded work.
+pub const MAX_COORDINATE_M: f64 = 1e8;
+
+/// Why a record cannot be right, if it cannot: the scan header's angles and
+/// range limits, the stamp, and the poses (see [`read_log`]).
+pub fn check_record(record: &LogRecord) -> Result<(), String> {
+    let (stamp, poses) = match record {
+        LogRecord::Scan(s) => {
+            check_scan_header(&s.scan)?;
+            (s.scan.stamp_s, [s.pose, s.odometry])
+        }
+        LogRecord::Odometry(o) => (Some(o.stamp_s), [Some(o.pose), None]),
+    };
+    if let Some(t) = stamp.filter(|t| !t.is_finite()) {
+        return Err(format!("the timestamp is not finite ({t})"));
+    }
+    for (p, name) in poses.iter().zip(["pose", "odometry"]) {
+        let Some(p) = p else { continue };
+        if !(p.x.is_finite() && p.y.is_finite() && p.heading.is_finite()) {
+            return Err(format!("the {name} is not finite ({}, {}, {})", p.x, p.y, p.heading));
+        }
+        if p.x.abs() > MAX_COORDINATE_M || p.y.abs() > MAX_COORDINATE_M {
+            return Err(format!(
+                "the {name} ({}, {}) m lies beyond ±{MAX_COORDINATE_M:e} m",
+                p.x, p.y
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Why a scan's header cannot be right, if it cannot: `angle_min` not finite
+/// or beyond ±2π, `angle_increment` zero or not finite, beams spanning more
+/// than a turn, `range_min` negative or not finite, `range_max` NaN or not
+/// above `range_min` (an infinite `range_max` is no upper limit).
+pub fn check_scan_header(scan: &pcaline_geometry::Scan) -> Result<(), String> {
+    use std::f64::consts::TAU;
+    let (a0, inc) = (f64::from(scan.angle_min), f64::from(scan.angle_increment));
+    if !a0.is_finite() || a0.abs() > TAU + 1e-3 {
+        return Err(format!("angle_min {a0} rad is not within ±2π"));
+    }
+    if !inc.is_finite() || inc == 0.0 {
+        return Err(format!("angle_increment {inc} rad must be finite and not zero"));
+    }
+    let span = inc.abs() * scan.ranges.len().saturating_sub(1) as f64;
+    if span > TAU + 1e-3 {
+        return Err(format!(
+            "{} beams of {inc} rad span {:.1}°, more than a turn",
+            scan.ranges.len(),
+            span.to_degrees()
+        ));
+    }
+    let (min, max) = (scan.range_min, scan.range_max);
+    if !min.is_finite() || min < 0.0 {
+        return Err(format!("range_min {min} m must be finite and not negative"));
+    }
+    if max.is_nan() || max <= min {
+        return Err(format!("range_max {max} m is not above range_min {min} m"));
+    }
+    Ok(())
+}
+
+fn read_format(
+    path: &Path,
+    format: LogFormat,
+    options: &LogOptions,
+    mut visit: impl FnMut(LogRecord) -> ControlFlow<()>,
+) -> Result<usize, IoError> {
     let topic = options.topic.as_deref();
     match format {
         LogFormat::Carmen => {
@@ -107,5 +207,62 @@ pub fn read_log(
         LogFormat::Mcap => read_mcap(path, topic, &mut visit),
         LogFormat::Json => read_scan_json(path, &mut visit),
         LogFormat::Csv => read_scan_csv(path, &mut visit),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pcaline_geometry::Scan;
+
+    #[test]
+    fn impossible_scan_headers_are_named() {
+        let ok = Scan::new(-2.35, 0.0043633, 0.02, 60.0, vec![1.0; 1081]);
+        check_scan_header(&ok).unwrap();
+        let unbounded = Scan::new(-1.0, 0.01, 0.0, f32::INFINITY, vec![1.0; 10]);
+        check_scan_header(&unbounded).unwrap();
+        let bad = [
+            (Scan::new(-1.0, 0.0, 0.0, 30.0, vec![1.0; 10]), "angle_increment"),
+            (Scan::new(-1.0, 1e30, 0.0, 30.0, vec![1.0; 10]), "more than a turn"),
+            (Scan::new(-1.0, 0.01, 0.0, 30.0, vec![1.0; 1000]), "more than a turn"),
+            (Scan::new(1e38, 0.01, 0.0, 30.0, vec![1.0; 10]), "angle_min"),
+            (Scan::new(f32::NAN, 0.01, 0.0, 30.0, vec![1.0; 10]), "angle_min"),
+            (Scan::new(-1.0, 0.01, 5.0, 1.0, vec![1.0; 10]), "range_max"),
+            (Scan::new(-1.0, 0.01, 0.0, -1.0, vec![1.0; 10]), "range_max"),
+            (Scan::new(-1.0, 0.01, -1.0, 30.0, vec![1.0; 10]), "range_min"),
+            (Scan::new(-1.0, 0.01, 0.0, f32::NAN, vec![1.0; 10]), "range_max"),
+        ];
+        for (scan, what) in bad {
+            let e = check_scan_header(&scan).unwrap_err();
+            assert!(e.contains(what), "{e}");
+        }
+    }
+
+    #[test]
+    fn non_finite_or_far_poses_and_stamps_are_refused() {
+        use crate::{OdometryRecord, ScanRecord};
+        use pcaline_geometry::Pose2;
+        let scan = |pose: Pose2, stamp: f64| {
+            LogRecord::Scan(ScanRecord {
+                scan: Scan::new(-1.0, 0.01, 0.0, 30.0, vec![1.0; 10]).with_stamp(stamp),
+                pose: Some(pose),
+                odometry: None,
+                position: 3,
+                sensor: None,
+            })
+        };
+        check_record(&scan(Pose2::new(5e7, -5e7, 1.0), 1.0)).unwrap();
+        assert!(
+            check_record(&scan(Pose2::new(1e16, 0.0, 0.0), 1.0)).unwrap_err().contains("beyond")
+        );
+        let nan = Pose2 { x: f64::NAN, y: 0.0, heading: 0.0 };
+        assert!(check_record(&scan(nan, 1.0)).unwrap_err().contains("not finite"));
+        assert!(check_record(&scan(Pose2::default(), f64::NAN)).unwrap_err().contains("timestamp"));
+        let odom = LogRecord::Odometry(OdometryRecord {
+            pose: Pose2 { x: 0.0, y: 0.0, heading: f64::INFINITY },
+            stamp_s: 0.0,
+            position: 1,
+        });
+        assert!(check_record(&odom).is_err());
     }
 }

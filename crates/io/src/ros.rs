@@ -4,7 +4,7 @@
 
 use crate::laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1};
 use crate::{IoError, LogRecord, ScanRecord};
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::ops::ControlFlow;
 use std::path::Path;
 
@@ -90,6 +90,7 @@ fn read_ros1_checked(
     }
     positions.sort_unstable();
     let mut connections: HashMap<u32, bool> = HashMap::new();
+    let mut scan_topics = BTreeSet::new();
     let (mut index, mut count) = (0usize, 0usize);
     for (k, pos) in positions.iter().enumerate() {
         let mut records = bag.chunk_records();
@@ -103,6 +104,9 @@ fn read_ros1_checked(
             let msg = msg.map_err(|e| bad(format!("after message {index}: {e}")))?;
             match msg {
                 rosbag::MessageRecord::Connection(c) => {
+                    if c.tp == ROS1_TYPE {
+                        scan_topics.insert(c.topic.to_string());
+                    }
                     let wanted = c.tp == ROS1_TYPE && topic.is_none_or(|t| t == c.topic);
                     connections.insert(c.id, wanted);
                 }
@@ -121,7 +125,32 @@ fn read_ros1_checked(
             }
         }
     }
+    topic_exists(path, topic, &scan_topics)?;
     Ok(count)
+}
+
+/// A `topic` asked for that no LaserScan channel has is an error listing
+/// the LaserScan topics that do exist.
+fn topic_exists(
+    path: &Path,
+    topic: Option<&str>,
+    scan_topics: &BTreeSet<String>,
+) -> Result<(), IoError> {
+    match topic {
+        Some(t) if !scan_topics.contains(t) => Err(IoError::parse(
+            path,
+            None,
+            format!(
+                "no LaserScan on topic {t:?} (LaserScan topics: {})",
+                if scan_topics.is_empty() {
+                    "none".to_string()
+                } else {
+                    scan_topics.iter().cloned().collect::<Vec<_>>().join(", ")
+                }
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// The `.db3` files of a ROS 2 bag: the file itself, or the `.db3` files of
@@ -151,6 +180,7 @@ pub fn read_ros2_bag(
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
     let mut count = 0;
+    let mut scan_topics = BTreeSet::new();
     for file in ros2_files(path)? {
         let sql = |e: rusqlite::Error| IoError::parse(&file, None, format!("sqlite: {e}"));
         let db = rusqlite::Connection::open_with_flags(
@@ -159,14 +189,20 @@ pub fn read_ros2_bag(
         )
         .map_err(sql)?;
         let mut topics = db.prepare("SELECT id, name, type FROM topics").map_err(sql)?;
-        let wanted: Vec<i64> = topics
+        let scans: Vec<(i64, String)> = topics
             .query_map([], |r| {
                 Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?, r.get::<_, String>(2)?))
             })
             .map_err(sql)?
             .filter_map(Result::ok)
-            .filter(|(_, name, ty)| ty == ROS2_TYPE && topic.is_none_or(|t| t == name))
-            .map(|(id, _, _)| id)
+            .filter(|(_, _, ty)| ty == ROS2_TYPE)
+            .map(|(id, name, _)| (id, name))
+            .collect();
+        scan_topics.extend(scans.iter().map(|(_, name)| name.clone()));
+        let wanted: Vec<i64> = scans
+            .iter()
+            .filter(|(_, name)| topic.is_none_or(|t| t == name))
+            .map(|(id, _)| *id)
             .collect();
         if wanted.is_empty() {
             continue;
@@ -199,6 +235,7 @@ pub fn read_ros2_bag(
             }
         }
     }
+    topic_exists(path, topic, &scan_topics)?;
     Ok(count)
 }
 
@@ -216,12 +253,16 @@ pub fn read_mcap(
         .with_record_length_limit(usize::try_from(len).unwrap_or(usize::MAX));
     let reader = mcap::io::MessageReader::new_with_options(std::io::BufReader::new(file), options);
     let mut count = 0;
+    let mut scan_topics = BTreeSet::new();
     for (index, message) in reader.enumerate() {
         let message = message
             .map_err(|e| IoError::parse(path, None, format!("after message {index}: {e}")))?;
         let ch = &message.channel;
         let is_scan =
             ch.schema.as_ref().is_some_and(|s| s.name == ROS2_TYPE) && ch.message_encoding == "cdr";
+        if is_scan && !scan_topics.contains(&ch.topic) {
+            scan_topics.insert(ch.topic.clone());
+        }
         if !is_scan || topic.is_some_and(|t| t != ch.topic) {
             continue;
         }
@@ -230,9 +271,10 @@ pub fn read_mcap(
         })?;
         count += 1;
         if visit(scan_record(scan, index + 1)).is_break() {
-            break;
+            return Ok(count);
         }
     }
+    topic_exists(path, topic, &scan_topics)?;
     Ok(count)
 }
 
@@ -283,6 +325,13 @@ mod tests {
         assert_eq!(got, scans);
         let all = read_mcap(&path, None, &mut |_| ControlFlow::Continue(())).unwrap();
         assert_eq!(all, 10);
+        // A topic no LaserScan channel has: an error listing those that exist.
+        let e = read_mcap(&path, Some("/nope"), &mut |_| ControlFlow::Continue(())).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("no LaserScan on topic \"/nope\" (LaserScan topics: /other, /scan)"),
+            "{e}"
+        );
         std::fs::remove_file(&path).unwrap();
     }
 }
