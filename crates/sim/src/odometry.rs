@@ -71,16 +71,18 @@ impl OdometryModel {
             ConfigError::check(v.is_finite(), field, v, "must be finite")?;
         }
         ConfigError::check(
-            self.heading_random_walk_rad_sqrt_s >= 0.0,
+            self.heading_random_walk_rad_sqrt_s >= 0.0
+                && self.heading_random_walk_rad_sqrt_s.is_finite(),
             "odometry.heading_random_walk",
             self.heading_random_walk_rad_sqrt_s,
-            "must be >= 0",
+            "must be finite and >= 0",
         )?;
         ConfigError::check(
-            self.position_random_walk_m_sqrt_s >= 0.0,
+            self.position_random_walk_m_sqrt_s >= 0.0
+                && self.position_random_walk_m_sqrt_s.is_finite(),
             "odometry.position_random_walk",
             self.position_random_walk_m_sqrt_s,
-            "must be >= 0",
+            "must be finite and >= 0",
         )
     }
 }

@@ -5,7 +5,7 @@
 //! crate's job. See `sim-scenes/README.md` for the schema with an example.
 
 use crate::{OdometryModel, SensorModel, Tilt, Trajectory, Wall, World};
-use pcaline_geometry::{Point2, Pose2, RangeNoise};
+use pcaline_geometry::{Point2, Pose2, RangeNoise, Vector2};
 use serde::{Deserialize, Serialize};
 
 /// A scene: the world, the sensor, and how the vehicle moves through it.
@@ -184,6 +184,18 @@ pub struct SceneError {
     pub message: String,
 }
 
+/// Vertices farther than this from the origin, metres, are refused: no
+/// LIDAR scene needs them, and evaluation bins every wall in 5 cm.
+pub const MAX_COORDINATE_M: f64 = 1e5;
+/// The most wall and obstacle length a scene may hold, metres.
+pub const MAX_WALL_LENGTH_M: f64 = 1e6;
+/// The most scans a scene's run may take (seven hours at 40 Hz).
+pub const MAX_SCANS: f64 = 1e6;
+/// A start or waypoint from which more than this fraction of directions
+/// meets no wall lies outside the walls (a door in a room's wall lets
+/// through a few directions, the outside of a room at least a quarter).
+const MAX_ESCAPING_FRACTION: f64 = 0.25;
+
 fn err(item: impl Into<String>, message: impl Into<String>) -> SceneError {
     SceneError { item: item.into(), message: message.into() }
 }
@@ -192,8 +204,10 @@ impl Scene {
     /// Checks the scene: every shape has at least 2 finite vertices (3 when
     /// closed) and no zero-length wall; there is at least one wall; the sensor
     /// and odometry values are valid; the trajectory has a positive speed, yaw
-    /// rate and scan rate, stays within the walls' bounds and never passes
-    /// through a wall or obstacle.
+    /// rate and scan rate, starts and turns inside the walls (not outside
+    /// them, not inside an obstacle) and never passes through a wall or
+    /// obstacle. Work is bounded: vertices within [`MAX_COORDINATE_M`], at
+    /// most [`MAX_WALL_LENGTH_M`] of walls and [`MAX_SCANS`] scans.
     pub fn validate(&self) -> Result<(), SceneError> {
         for (kind, shapes) in [("walls", &self.walls), ("obstacles", &self.obstacles)] {
             for (i, shape) in shapes.iter().enumerate() {
@@ -209,6 +223,12 @@ impl Scene {
                     if !p[0].is_finite() || !p[1].is_finite() {
                         return Err(err(item, format!("vertex {k} is not finite: {p:?}")));
                     }
+                    if p[0].abs() > MAX_COORDINATE_M || p[1].abs() > MAX_COORDINATE_M {
+                        return Err(err(
+                            item,
+                            format!("vertex {k} {p:?} lies beyond ±{MAX_COORDINATE_M:e} m"),
+                        ));
+                    }
                 }
                 for (k, (a, b)) in segments(shape).enumerate() {
                     if (b - a).norm() < 1e-9 {
@@ -219,6 +239,14 @@ impl Scene {
         }
         if self.walls.is_empty() && self.obstacles.is_empty() {
             return Err(err("walls", "the scene has no walls"));
+        }
+        let walls = self.world_walls();
+        let length: f64 = walls.iter().map(|w| (w.b - w.a).norm()).sum();
+        if length > MAX_WALL_LENGTH_M {
+            return Err(err(
+                "walls",
+                format!("{length:.0} m of walls, more than {MAX_WALL_LENGTH_M:e} m"),
+            ));
         }
         self.sensor_model().validate().map_err(|e| err("sensor", e.to_string()))?;
         self.odometry_model().validate().map_err(|e| err("odometry", e.to_string()))?;
@@ -248,6 +276,38 @@ impl Scene {
             if p[0] < lo.x || p[0] > hi.x || p[1] < lo.y || p[1] > hi.y {
                 return Err(err(item.clone(), format!("{p:?} lies outside every wall")));
             }
+            let at = Point2::new(p[0], p[1]);
+            let escaping = escaping_fraction(&at, &walls);
+            if escaping > MAX_ESCAPING_FRACTION {
+                return Err(err(
+                    item.clone(),
+                    format!(
+                        "{p:?} lies outside the walls ({:.0}% of the directions from it meet no wall)",
+                        100.0 * escaping
+                    ),
+                ));
+            }
+            for (i, o) in self.obstacles.iter().enumerate() {
+                if o.closed && inside_polygon(&at, &o.points) {
+                    return Err(err(
+                        item.clone(),
+                        format!("{p:?} lies inside {}", shape_item("obstacles", i, o)),
+                    ));
+                }
+            }
+        }
+        let rate_hz = self.sensor_model().rate_hz;
+        let one_lap_s = self.trajectory_of_laps(1).duration_s();
+        let lap_s = self.trajectory_of_laps(2).duration_s() - one_lap_s;
+        let scans = (one_lap_s + f64::from(t.laps.max(1) - 1) * lap_s) * rate_hz;
+        if scans.is_nan() || scans > MAX_SCANS {
+            return Err(err(
+                "trajectory",
+                format!(
+                    "the run would take {scans:.3e} scans, more than {MAX_SCANS:e}: shorten the \
+                     path, lower laps or scan_rate_hz, or raise speed_m_s"
+                ),
+            ));
         }
         let mut legs: Vec<_> = path.windows(2).map(|w| (w[1].0.clone(), w[0].1, w[1].1)).collect();
         if t.laps > 1
@@ -343,6 +403,11 @@ impl Scene {
 
     /// The true motion.
     pub fn trajectory(&self) -> Trajectory {
+        self.trajectory_of_laps(self.trajectory.laps)
+    }
+
+    /// The true motion driven `laps` times.
+    fn trajectory_of_laps(&self, laps: u32) -> Trajectory {
         let t = &self.trajectory;
         let waypoints: Vec<_> = t.waypoints.iter().map(|p| Point2::new(p[0], p[1])).collect();
         Trajectory::new(
@@ -350,7 +415,7 @@ impl Scene {
             &waypoints,
             t.speed_m_s,
             t.yaw_rate_deg_s.to_radians(),
-            t.laps,
+            laps,
         )
     }
 
@@ -383,6 +448,48 @@ fn segments(shape: &Shape) -> impl Iterator<Item = (Point2<f64>, Point2<f64>)> +
         let (a, b) = (pts[i], pts[(i + 1) % n]);
         (Point2::new(a[0], a[1]), Point2::new(b[0], b[1]))
     })
+}
+
+/// The fraction of 72 directions (every 5°) in which a ray from `p` meets
+/// no wall.
+fn escaping_fraction(p: &Point2<f64>, walls: &[Wall]) -> f64 {
+    const RAYS: usize = 72;
+    let escaping = (0..RAYS)
+        .filter(|k| {
+            let angle = (*k as f64 + 0.5) * std::f64::consts::TAU / RAYS as f64;
+            let u = Vector2::new(angle.cos(), angle.sin());
+            !walls.iter().any(|w| ray_hits(p, &u, &w.a, &w.b))
+        })
+        .count();
+    escaping as f64 / RAYS as f64
+}
+
+/// True when the ray from `p` along `u` meets the segment `a-b`.
+fn ray_hits(p: &Point2<f64>, u: &Vector2<f64>, a: &Point2<f64>, b: &Point2<f64>) -> bool {
+    let (e, f) = (b - a, a - p);
+    let den = u.x * e.y - u.y * e.x;
+    if den.abs() < 1e-15 {
+        return false;
+    }
+    let t = (f.x * e.y - f.y * e.x) / den;
+    let s = (f.x * u.y - f.y * u.x) / den;
+    t > 0.0 && (0.0..=1.0).contains(&s)
+}
+
+/// Even-odd test of `p` against the closed polygon `points`.
+fn inside_polygon(p: &Point2<f64>, points: &[[f64; 2]]) -> bool {
+    let n = points.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (points[i], points[(i + 1) % n]);
+        if (a[1] > p.y) != (b[1] > p.y) {
+            let x = a[0] + (p.y - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if p.x < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
 }
 
 /// True when segments `a-b` and `c-d` properly cross or touch.
@@ -427,6 +534,50 @@ mod tests {
         let s = square_scene();
         assert_eq!(s.validate(), Ok(()));
         assert_eq!(s.world_walls().len(), 4);
+    }
+
+    /// Scenes that pass a bounding-box test but that a run cannot handle:
+    /// huge coordinates, runs of unbounded length, a start outside an
+    /// L-shaped room or inside an obstacle.
+    #[test]
+    fn work_is_bounded_and_the_path_is_inside() {
+        let mut s = square_scene();
+        s.walls[0].points[2] = [1e20, 1e20];
+        assert!(s.validate().unwrap_err().to_string().contains("beyond"));
+        for (edit, what) in [
+            ((|t: &mut TrajectorySpec| t.laps = 100_000_000) as fn(&mut TrajectorySpec), "scans"),
+            (|t| t.speed_m_s = 1e-6, "scans"),
+            (|t| t.scan_rate_hz = Some(1e9), "scans"),
+        ] {
+            let mut s = square_scene();
+            edit(&mut s.trajectory);
+            let e = s.validate().unwrap_err();
+            assert!(e.item == "trajectory" && e.message.contains(what), "{e}");
+        }
+        let mut s = square_scene();
+        s.walls[0].points = vec![[0.0, 0.0], [1e6, 0.0], [1e6, 2.0], [0.0, 2.0]];
+        assert!(s.validate().is_err(), "a 10^6 m corridor");
+        // An L-shaped room: its bounding box holds the notch, which lies
+        // outside the walls.
+        let mut s = square_scene();
+        s.walls[0].points =
+            vec![[0.0, 0.0], [10.0, 0.0], [10.0, 5.0], [5.0, 5.0], [5.0, 10.0], [0.0, 10.0]];
+        s.trajectory.waypoints = vec![[4.0, 1.0], [4.0, 4.0]];
+        assert_eq!(s.validate(), Ok(()));
+        s.trajectory.start = StartPose { x: 8.0, y: 8.0, heading_deg: 0.0 };
+        let e = s.validate().unwrap_err();
+        assert!(e.item == "trajectory.start" && e.message.contains("outside the walls"), "{e}");
+        let mut s = square_scene();
+        s.obstacles.push(Shape {
+            name: "crate".into(),
+            points: vec![[8.0, 8.0], [9.5, 8.0], [9.5, 9.5], [8.0, 9.5]],
+            closed: true,
+        });
+        s.trajectory.waypoints = vec![[9.0, 1.0], [9.0, 5.0]];
+        assert_eq!(s.validate(), Ok(()));
+        s.trajectory.waypoints.push([8.5, 8.5]);
+        let e = s.validate().unwrap_err();
+        assert!(e.message.contains("inside obstacles[0]"), "{e}");
     }
 
     #[test]
