@@ -131,11 +131,14 @@ impl MotionNoise {
             )?;
         }
         ConfigError::check_field(
-            self.translation_floor_m > 0.0 && self.rotation_floor_rad > 0.0,
+            self.translation_floor_m > 0.0
+                && self.rotation_floor_rad > 0.0
+                && self.translation_floor_m.is_finite()
+                && self.rotation_floor_rad.is_finite(),
             prefix,
             "translation_floor_m",
             self.translation_floor_m.min(self.rotation_floor_rad),
-            "the floors must be > 0 (a step is never known exactly)",
+            "the floors must be finite and > 0 (a step is never known exactly)",
         )
     }
 }

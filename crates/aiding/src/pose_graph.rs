@@ -111,7 +111,7 @@ impl OptimizerConfig {
             "must be finite and > 0",
         )?;
         ConfigError::check_field(
-            self.loop_chi2 > 0.0,
+            self.loop_chi2 > 0.0 && self.loop_chi2.is_finite(),
             prefix,
             "loop_chi2",
             self.loop_chi2,

@@ -154,7 +154,12 @@ impl FitConfig {
 
     /// Checks every value; an invalid one is a [`ConfigError`].
     pub fn validate(&self) -> Result<(), ConfigError> {
-        ConfigError::check(self.eth > 1.0, "fitting.eth", self.eth, "must be > 1")?;
+        ConfigError::check(
+            self.eth > 1.0 && self.eth.is_finite(),
+            "fitting.eth",
+            self.eth,
+            "must be finite and > 1",
+        )?;
         ConfigError::check(
             self.min_points >= 3,
             "fitting.min_points",
