@@ -100,7 +100,7 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     let bar = progress::spinner("scans", quiet);
     let mut lines_total = 0usize;
     let mut failed: Option<anyhow::Error> = None;
-    read_log(&args.file, &args.log.options(), |record| {
+    read_log(&args.file, &args.log.options()?, |record| {
         let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
         let d = detector.detect(&s.scan);
         let scan =

@@ -166,7 +166,7 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
     let mut found = None;
     let mut named_sensor = None;
     let mut k = 0;
-    read_log(&args.file, &args.log.options(), |r| {
+    read_log(&args.file, &args.log.options()?, |r| {
         if let LogRecord::Scan(s) = r {
             if k == args.index {
                 named_sensor = s.sensor;

@@ -1,5 +1,6 @@
 //! Arguments shared by the commands that read logs.
 
+use crate::exit::BadInput;
 use clap::ValueEnum;
 use pcaline::geometry::SensorProfile;
 use pcaline_io::{CarmenOptions, LogFormat, LogOptions, LogRecord, read_log};
@@ -32,12 +33,12 @@ pub struct LogArgs {
     /// Only this topic (ROS formats).
     #[arg(long)]
     pub topic: Option<String>,
-    /// Field of view of CARMEN FLASER lines, degrees (needed for beam counts
-    /// other than 180, 181 and 361).
-    #[arg(long)]
+    /// Field of view of CARMEN FLASER lines, degrees, in (0, 360] (needed
+    /// for beam counts other than 180, 181 and 361).
+    #[arg(long, allow_negative_numbers = true)]
     pub fov: Option<f64>,
-    /// CARMEN ranges at or above this are no return, metres.
-    #[arg(long, default_value_t = 80.0)]
+    /// CARMEN ranges at or above this are no return, metres (> 0).
+    #[arg(long, default_value_t = 80.0, allow_negative_numbers = true)]
     pub max_range: f64,
     /// The sensor: utm30lx-ew, sick-lms, urg-04lx or rplidar. The detector's
     /// thresholds use its datasheet noise. Absent: the configuration file's
@@ -66,7 +67,7 @@ impl LogArgs {
             return Ok(Some(s));
         }
         let mut named = None;
-        read_log(file, &self.options(), |record| match record {
+        read_log(file, &self.options()?, |record| match record {
             LogRecord::Scan(s) => {
                 named = s.sensor;
                 ControlFlow::Break(())
@@ -76,9 +77,23 @@ impl LogArgs {
         Ok(named)
     }
 
-    /// The reader options.
-    pub fn options(&self) -> LogOptions {
-        LogOptions {
+    /// The reader options; an error naming the option for a field of view
+    /// outside (0, 360] degrees or a maximum range that is not a positive
+    /// number.
+    pub fn options(&self) -> anyhow::Result<LogOptions> {
+        if let Some(fov) = self.fov
+            && !(fov > 0.0 && fov <= 360.0)
+        {
+            return Err(BadInput(format!("--fov {fov}: must be in (0, 360] degrees")).into());
+        }
+        if !(self.max_range > 0.0 && self.max_range.is_finite()) {
+            return Err(BadInput(format!(
+                "--max-range {}: must be a positive number of metres",
+                self.max_range
+            ))
+            .into());
+        }
+        Ok(LogOptions {
             format: self.format.map(|f| match f {
                 FormatArg::Carmen => LogFormat::Carmen,
                 FormatArg::Ros1 => LogFormat::Ros1Bag,
@@ -93,6 +108,6 @@ impl LogArgs {
                 max_range_m: self.max_range,
                 ..CarmenOptions::default()
             },
-        }
+        })
     }
 }

@@ -114,7 +114,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     let mut sharpness = pcaline_eval::OccupiedCells::new(0.05);
     let mut mcap = McapOut::create(args.mcap.as_deref())?;
     let mut failed: Option<anyhow::Error> = None;
-    read_log(&args.log, &args.input.options(), |record| {
+    read_log(&args.log, &args.input.options()?, |record| {
         let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
         lines.clear();
         // Deskewed with the velocity of the last step (the source's, or the

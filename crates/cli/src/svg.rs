@@ -41,7 +41,10 @@ impl Plot {
     pub fn new(mut min: [f64; 2], mut max: [f64; 2], width_px: f64) -> Self {
         for k in 0..2 {
             let span = max[k] - min[k];
-            if span.is_nan() || span <= 1e-6 {
+            if !span.is_finite() {
+                // Bounds that overflow (1e308 apart) cannot be drawn to scale.
+                (min[k], max[k]) = (-1.0, 1.0);
+            } else if span <= 1e-6 {
                 min[k] -= 1.0;
                 max[k] += 1.0;
             }
@@ -192,8 +195,7 @@ impl Plot {
             x1 - x0,
             y0 - y1
         );
-        let mut t = (self.min[0] / step_x).ceil() * step_x;
-        while t <= self.max[0] {
+        for t in ticks(self.min[0], self.max[0], step_x) {
             let (x, _) = self.px([t, self.min[1]]);
             let _ = writeln!(
                 out,
@@ -202,10 +204,8 @@ impl Plot {
                 y0 + 19.0,
                 fmt_tick(t)
             );
-            t += step_x;
         }
-        let mut t = (self.min[1] / step_y).ceil() * step_y;
-        while t <= self.max[1] {
+        for t in ticks(self.min[1], self.max[1], step_y) {
             let (_, y) = self.px([self.min[0], t]);
             let _ = writeln!(
                 out,
@@ -215,7 +215,6 @@ impl Plot {
                 y + 4.0,
                 fmt_tick(t)
             );
-            t += step_y;
         }
         let _ = writeln!(
             out,
@@ -282,6 +281,17 @@ fn triangle(x: f64, y: f64, heading_rad: f64, size: f64, color: &str) -> String 
     )
 }
 
+/// The multiples of `step` in `min..=max`, computed from their index so a
+/// step below the values' precision (coordinates of 1e16 m) cannot loop
+/// forever; at most 100, none when the bounds are not finite.
+fn ticks(min: f64, max: f64, step: f64) -> Vec<f64> {
+    let (first, last) = ((min / step).ceil(), (max / step).floor());
+    if !(first.is_finite() && last.is_finite() && step > 0.0) || last - first > 100.0 {
+        return Vec::new();
+    }
+    (0..=(last - first) as i64).map(|k| (first + k as f64) * step).collect()
+}
+
 fn nice_step(raw: f64) -> f64 {
     let mag = 10f64.powf(raw.max(1e-9).log10().floor());
     let f = raw / mag;
@@ -340,6 +350,17 @@ mod tests {
         let ring = s.lines().find(|l| l.contains("#d62728")).unwrap();
         assert!(ring.contains(r#"fill="none""#), "{ring}");
         assert!(s.lines().any(|l| l.starts_with("<polygon") && l.contains("#000")));
+    }
+
+    #[test]
+    fn huge_coordinates_end_with_bounded_ticks() {
+        assert_eq!(ticks(0.0, 10.0, 2.0), [0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
+        assert!(ticks(1e16, 1e16 + 8.0, 1.0).len() <= 100, "no endless loop at 1e16");
+        assert!(ticks(-1e308, 1e308, 1e307).len() <= 100);
+        let p = Plot::new([1e16, 1e16], [1e16 + 10.0, 1e16 + 10.0], 400.0);
+        assert!(p.finish("far").contains("</svg>"));
+        let p = Plot::new([-1e308, -1e308], [1e308, 1e308], 400.0);
+        assert!(p.finish("overflow").contains("</svg>"));
     }
 
     #[test]
