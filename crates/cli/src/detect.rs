@@ -29,11 +29,12 @@ pub struct DetectArgs {
     /// --show-config`).
     #[arg(long, default_value = "default")]
     config: String,
-    /// Write CSV (one line per detected line) instead of JSON (an array with
-    /// one scan per line of text).
+    /// Write CSV (one row per detected line) instead of JSON.
     #[arg(long)]
     csv: bool,
-    /// Output file; stdout when absent.
+    /// Output file: a JSON array with one scan per line of text, or JSON
+    /// Lines when the name ends in `.jsonl`. Absent or `-`: JSON Lines (one
+    /// scan object per line) on stdout.
     #[arg(short, long)]
     output: Option<PathBuf>,
     /// Also write every scan and its lines to this MCAP file, for Foxglove
@@ -91,11 +92,17 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     let sensor = args.log.sensor(&args.file, config.sensor)?;
     let mut detector = LineDetector::new(config.detector_for(sensor))?;
     let mut mcap = McapOut::create(args.mcap.as_deref())?;
-    let sink = match &args.output {
+    let output = args.output.as_deref().filter(|p| *p != std::path::Path::new("-"));
+    let sink = match output {
         Some(path) => Sink::File(AtomicFile::create(path)?),
         None => Sink::Stdout(BufWriter::new(std::io::stdout().lock())),
     };
-    let format = if args.csv { LinesFormat::Csv } else { LinesFormat::Json };
+    let json_lines = output.is_none_or(|p| p.extension().is_some_and(|e| e == "jsonl"));
+    let format = match (args.csv, json_lines) {
+        (true, _) => LinesFormat::Csv,
+        (false, true) => LinesFormat::JsonLines,
+        (false, false) => LinesFormat::Json,
+    };
     let mut out = LinesWriter::new(sink, format);
     let bar = progress::spinner("scans", quiet);
     let mut lines_total = 0usize;
@@ -154,7 +161,7 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
         // Nothing is written: the temporary files are dropped.
         return Err(BadInput(format!("{}: no scans", args.file.display())).into());
     }
-    let sink = out.finish().map_err(|e| match &args.output {
+    let sink = out.finish().map_err(|e| match output {
         Some(path) => pcaline_io::IoError::io(path, e).into(),
         None => stdout_error(e),
     })?;

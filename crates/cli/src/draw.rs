@@ -137,6 +137,10 @@ pub struct ScanArgs {
     output: PathBuf,
 }
 
+/// The most beams `draw scan` draws (a 360° scan at 0.01° has 36,000): a
+/// picture of more is unreadable, and its SVG would run to gigabytes.
+const MAX_DRAWN_BEAMS: usize = 100_000;
+
 const PALETTE: [&str; 6] = ["#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#17becf"];
 
 /// Runs `pcaline draw`.
@@ -166,12 +170,13 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
     let mut found = None;
     let mut named_sensor = None;
     let mut k = 0;
+    // The whole file is read, as `detect` reads it, so a file broken after
+    // the scan drawn is refused too.
     read_log(&args.file, &args.log.options()?, |r| {
         if let LogRecord::Scan(s) = r {
             if k == args.index {
                 named_sensor = s.sensor;
                 found = Some(s.scan);
-                return ControlFlow::Break(());
             }
             k += 1;
         }
@@ -185,6 +190,15 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
         ))
         .into());
     };
+    if scan.ranges.len() > MAX_DRAWN_BEAMS {
+        return Err(BadInput(format!(
+            "{}: scan {} has {} beams; draw scan draws at most {MAX_DRAWN_BEAMS}",
+            args.file.display(),
+            args.index,
+            scan.ranges.len()
+        ))
+        .into());
+    }
     let config = crate::config_file::resolve(&args.config, 0.01)?;
     let sensor = args.log.sensor.or(config.sensor).or(named_sensor);
     let mut detector = LineDetector::new(config.detector_for(sensor))?;

@@ -32,10 +32,10 @@ pub struct EvalArgs {
     #[arg(long = "sigma-mm", default_values_t = [10.0, 30.0])]
     sigma_mm: Vec<f64>,
     /// Seeds per scene.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..))]
     seeds: u64,
     /// Scans per scene and seed for detection.
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = crate::count_at_least_one)]
     scans: usize,
     /// Configurations to evaluate, side by side (repeat): a preset (paper,
     /// default, split-and-merge, told-sigma, estimated, adaptive) or a TOML/JSON file

@@ -75,6 +75,16 @@ enum Command {
     Reproduce(reproduce::ReproduceArgs),
 }
 
+/// A count option (`--runs`, `--scans`): a whole number of at least 1, so a
+/// run over nothing cannot report "recall 1.000" and NaNs.
+fn count_at_least_one(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        Ok(_) => Err("must be at least 1".into()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// Output piped into a reader that stops early (`pcaline eval | head`) makes
 /// `println!` panic with a broken pipe; like ripgrep, end quietly instead.
 fn quiet_on_broken_pipe() {

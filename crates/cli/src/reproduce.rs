@@ -31,10 +31,10 @@ pub struct ReproduceArgs {
     #[arg(value_enum, default_value_t = Which::All)]
     which: Which,
     /// Runs per table row (the paper: 10,000).
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, value_parser = crate::count_at_least_one)]
     runs: usize,
     /// Runs of the ETh experiment (the paper: 100,000).
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = 100_000, value_parser = crate::count_at_least_one)]
     eth_runs: usize,
     /// Random seed.
     #[arg(long, default_value_t = 1)]

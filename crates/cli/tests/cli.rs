@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{data, pcaline, root, s, small_maze, tmp};
+use common::{data, json_lines, pcaline, root, s, small_maze, tmp};
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -98,8 +98,7 @@ fn detect_on_every_format_counts_every_scan() {
         let Some(path) = data(rel) else { continue };
         let out = pcaline(&["--quiet", "detect", s(&path)]);
         assert!(out.status.success(), "{rel}: {}", String::from_utf8_lossy(&out.stderr));
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        assert_eq!(v.as_array().unwrap().len(), scans, "{rel}");
+        assert_eq!(json_lines(&out.stdout).len(), scans, "{rel}");
     }
     if let Some(path) = data("ros1/laser_scan_matcher_demo.bag") {
         let csv = tmp("lines.csv");
@@ -273,8 +272,7 @@ fn detect_takes_a_configuration_file_and_rejects_an_unknown_preset() {
     let count = |args: &[&str]| -> usize {
         let out = pcaline(args);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        v[0]["lines"].as_array().unwrap().len()
+        json_lines(&out.stdout)[0]["lines"].as_array().unwrap().len()
     };
     assert_eq!(count(&["--quiet", "detect", s(&scan)]), 1);
     assert_eq!(count(&["--quiet", "detect", s(&scan), "--config", s(&config)]), 0);
@@ -294,7 +292,7 @@ fn detect_takes_a_sensor_and_says_which_noise_it_used() {
         all.extend_from_slice(args);
         let out = pcaline(&all);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()[0].clone()
+        json_lines(&out.stdout).remove(0)
     };
     let default = detect(&[]);
     assert_eq!(default["noise"]["near_sigma_m"], 0.01);

@@ -47,7 +47,7 @@ fn a_reader_that_stops_early_ends_detect_quietly() {
     let out = child.wait_with_output().unwrap();
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(head.starts_with(b"[\n{\"scan\":0"));
+    assert!(head.starts_with(b"{\"scan\":0"), "JSON Lines on stdout");
 }
 
 #[test]
@@ -105,4 +105,39 @@ fn run_draws_the_truth_under_the_estimate_and_dashes_odometry_in_the_legend() {
         .rfind(|l| l.starts_with("<line") && l.contains("#1f77b4"))
         .expect("an odometry swatch");
     assert!(odometry_swatch.contains("stroke-dasharray"), "{odometry_swatch}");
+}
+
+#[test]
+fn detect_writes_json_lines_to_stdout_or_dash_and_an_array_to_a_json_file() {
+    let log = carmen_log("formats.clf", 3);
+    for args in [vec![], vec!["-o", "-"]] {
+        let mut all = vec!["--quiet", "detect", s(&log), "--fov", "2"];
+        all.extend(args);
+        let out = pcaline(&all);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let objects = common::json_lines(&out.stdout);
+        assert_eq!(objects.len(), 3);
+        assert_eq!(objects[2]["scan"], 2);
+    }
+    let (json, jsonl) = (tmp("formats.json"), tmp("formats.jsonl"));
+    for path in [&json, &jsonl] {
+        let out = pcaline(&["--quiet", "detect", s(&log), "--fov", "2", "-o", s(path)]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let array: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(array.as_array().unwrap().len(), 3);
+    assert_eq!(common::json_lines(&std::fs::read(&jsonl).unwrap()).len(), 3);
+}
+
+#[test]
+fn output_onto_a_device_writes_through_it_and_never_replaces_it() {
+    let log = carmen_log("device.clf", 3);
+    let out = pcaline(&["--quiet", "detect", s(&log), "--fov", "2", "-o", "/dev/null"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!std::fs::metadata("/dev/null").unwrap().is_file(), "/dev/null is still a device");
+    let dir = tmp("a-folder");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = pcaline(&["detect", s(&log), "--fov", "2", "-o", s(&dir)]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("is a directory"));
 }

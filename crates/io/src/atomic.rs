@@ -16,28 +16,61 @@ use std::path::{Path, PathBuf};
 /// return), it removes the temporary file and leaves the target untouched.
 ///
 /// Edge cases: the target's folder must exist and be writable (the error
-/// names the target); a target that is a directory fails at the rename, and
-/// the temporary file is removed.
+/// names the target). A target that is a directory is refused. A symbolic
+/// link is followed: the file it points to is replaced, not the link. A
+/// device or FIFO (`/dev/stdout`, `/dev/null`, a named pipe) is written
+/// directly, never replaced by a regular file.
 #[derive(Debug)]
 pub struct AtomicFile {
     target: PathBuf,
-    tmp: PathBuf,
+    /// The temporary file renamed over the target; `None` when the target
+    /// is a device or FIFO written directly.
+    tmp: Option<PathBuf>,
     writer: Option<BufWriter<File>>,
 }
 
 impl AtomicFile {
-    /// Creates the temporary file for `target` (`.NAME.PID.tmp` beside it).
+    /// Creates the temporary file for `target` (`.NAME.PID.tmp` beside it),
+    /// or opens a device or FIFO target for writing.
     pub fn create(target: &Path) -> Result<Self, IoError> {
+        let shown = target;
+        let resolved;
+        let target = match std::fs::metadata(target) {
+            Ok(m) if m.is_dir() => {
+                return Err(IoError::io(
+                    shown,
+                    std::io::Error::other("is a directory, not a file to write"),
+                ));
+            }
+            Ok(m) if !m.is_file() => {
+                // A device, FIFO or socket: written in place.
+                let file = std::fs::OpenOptions::new()
+                    .write(true)
+                    .open(target)
+                    .map_err(|e| IoError::io(shown, e))?;
+                return Ok(AtomicFile {
+                    target: target.to_path_buf(),
+                    tmp: None,
+                    writer: Some(BufWriter::with_capacity(1 << 16, file)),
+                });
+            }
+            Ok(_) if target.is_symlink() => {
+                // Replace the file the link points to, and keep the link.
+                resolved = std::fs::canonicalize(target).map_err(|e| IoError::io(shown, e))?;
+                resolved.as_path()
+            }
+            _ => target,
+        };
         let dir = match target.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
         let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-        let file = File::create(&tmp).map_err(|e| IoError::io(target, e))?;
+        let file = File::create(&tmp).map_err(|e| IoError::io(shown, e))?;
         Ok(AtomicFile {
             target: target.to_path_buf(),
-            tmp,
+            tmp: Some(tmp),
             writer: Some(BufWriter::with_capacity(1 << 16, file)),
         })
     }
@@ -54,8 +87,13 @@ impl AtomicFile {
             let writer =
                 self.writer.take().ok_or_else(|| std::io::Error::other("already closed"))?;
             let file = writer.into_inner().map_err(|e| e.into_error())?;
-            file.sync_all()?;
-            std::fs::rename(&self.tmp, &self.target)
+            match &self.tmp {
+                Some(tmp) => {
+                    file.sync_all()?;
+                    std::fs::rename(tmp, &self.target)
+                }
+                None => Ok(()),
+            }
         })();
         result.map_err(|e| IoError::io(&self.target, e))
         // Drop removes the temporary file if the rename did not happen.
@@ -91,7 +129,9 @@ impl Drop for AtomicFile {
         // Still open: not committed. The rename moved the file otherwise,
         // and removing a path that no longer exists is harmless.
         self.writer.take();
-        let _ = std::fs::remove_file(&self.tmp);
+        if let Some(tmp) = &self.tmp {
+            let _ = std::fs::remove_file(tmp);
+        }
     }
 }
 
@@ -152,6 +192,26 @@ mod tests {
         f.commit().unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"aXcdef");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn devices_are_written_in_place_and_links_followed() {
+        let dir = std::env::temp_dir().join(format!("pcaline-atomic-dev-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // /dev/null stays a device.
+        write_atomic(Path::new("/dev/null"), b"nothing").unwrap();
+        let m = std::fs::metadata("/dev/null").unwrap();
+        assert!(!m.is_file(), "/dev/null is still a device");
+        assert!(AtomicFile::create(&dir).unwrap_err().to_string().contains("is a directory"));
+        // A link to a file: the file is replaced, the link kept.
+        let real = dir.join("real.json");
+        std::fs::write(&real, b"old").unwrap();
+        let link = dir.join("link.json");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(link.is_symlink());
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -115,6 +115,8 @@ pub enum LinesFormat {
     /// A JSON array of [`ScanLines`], one scan per line of text (so the
     /// output can also be read line by line).
     Json,
+    /// JSON Lines: one [`ScanLines`] object per line, nothing around them.
+    JsonLines,
     /// CSV, one row per line, with a header row.
     Csv,
 }
@@ -146,6 +148,7 @@ impl<W: Write> LinesWriter<W> {
     fn start(&mut self) -> std::io::Result<()> {
         match self.format {
             LinesFormat::Json => self.out.write_all(b"["),
+            LinesFormat::JsonLines => Ok(()),
             LinesFormat::Csv => self.out.write_all(LINES_CSV_HEADER.as_bytes()),
         }
     }
@@ -160,6 +163,10 @@ impl<W: Write> LinesWriter<W> {
                 self.out.write_all(if self.scans == 0 { b"\n" } else { b",\n" })?;
                 // serde_json keeps the kind of a failed write (a broken pipe stays one).
                 serde_json::to_writer(&mut self.out, scan).map_err(std::io::Error::from)?;
+            }
+            LinesFormat::JsonLines => {
+                serde_json::to_writer(&mut self.out, scan).map_err(std::io::Error::from)?;
+                self.out.write_all(b"\n")?;
             }
             LinesFormat::Csv => write_csv_rows(&mut self.out, scan)?,
         }
@@ -372,6 +379,16 @@ mod tests {
         assert_eq!(csv.lines().count(), 1 + 3, "header and one row per line");
         assert!(csv.lines().nth(3).unwrap().starts_with("2,3,0.05,"));
         assert_eq!(lines_to_csv(&[]).lines().count(), 1);
+        let mut w = LinesWriter::new(Vec::new(), LinesFormat::JsonLines);
+        for s in &scans {
+            w.write(s).unwrap();
+        }
+        let text = String::from_utf8(w.finish().unwrap()).unwrap();
+        assert_eq!(text.lines().count(), 3);
+        for (k, line) in text.lines().enumerate() {
+            let v: serde_json::Value = serde_json::from_str(line).unwrap();
+            assert_eq!(v["scan"], k);
+        }
     }
 
     #[test]

@@ -21,7 +21,10 @@ pub struct MapLineRecord {
     pub n_points: usize,
     /// Residual standard deviation, metres.
     pub residual_std_m: f64,
-    /// Covariance of (alpha, d), row-major.
+    /// Covariance of (alpha, d), row-major. JSON has no infinity or NaN:
+    /// those are written as the strings `"inf"`, `"-inf"` and `"nan"`, so
+    /// a line whose covariance is unbounded reads back as it was written.
+    #[serde(with = "non_finite_as_text")]
     pub covariance: [f64; 4],
     /// Centroid of the absorbed points.
     pub centroid: [f64; 2],
@@ -47,6 +50,57 @@ pub struct MapLineRecord {
     /// older files: its own scatter).
     #[serde(default)]
     pub observed_scatter: Option<f64>,
+}
+
+/// Floats that may be infinite or NaN, as numbers when finite and as the
+/// strings `"inf"`, `"-inf"`, `"nan"` otherwise (serde_json would write
+/// `null`, which does not read back).
+mod non_finite_as_text {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    #[derive(Serialize, Deserialize)]
+    #[serde(untagged)]
+    enum Float {
+        Number(f64),
+        Text(String),
+    }
+
+    pub fn serialize<S: Serializer, const N: usize>(v: &[f64; N], s: S) -> Result<S::Ok, S::Error> {
+        let items: Vec<Float> = v
+            .iter()
+            .map(|&x| match x {
+                x if x.is_finite() => Float::Number(x),
+                x if x.is_nan() => Float::Text("nan".into()),
+                x if x > 0.0 => Float::Text("inf".into()),
+                _ => Float::Text("-inf".into()),
+            })
+            .collect();
+        items.serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>, const N: usize>(
+        d: D,
+    ) -> Result<[f64; N], D::Error> {
+        let items = Vec::<Float>::deserialize(d)?;
+        let values: Vec<f64> = items
+            .into_iter()
+            .map(|f| match f {
+                Float::Number(x) => Ok(x),
+                Float::Text(t) => match t.as_str() {
+                    "inf" => Ok(f64::INFINITY),
+                    "-inf" => Ok(f64::NEG_INFINITY),
+                    "nan" => Ok(f64::NAN),
+                    other => Err(serde::de::Error::custom(format!(
+                        "expected a number, \"inf\", \"-inf\" or \"nan\", found {other:?}"
+                    ))),
+                },
+            })
+            .collect::<Result<_, _>>()?;
+        let n = values.len();
+        values
+            .try_into()
+            .map_err(|_| serde::de::Error::custom(format!("expected {N} numbers, found {n}")))
+    }
 }
 
 /// A saved map.
@@ -169,5 +223,25 @@ mod tests {
         let m = Moments::from_points(&pts);
         let q = line_from_moments(&m, &pts[0], &pts[9]).unwrap();
         assert_eq!(map2.find_match(&q).map(|m| m.id), Some(LineId(1)));
+    }
+
+    /// A covariance that is not finite (unbounded, or NaN) reads back as
+    /// written instead of failing on a `null`.
+    #[test]
+    fn non_finite_covariances_read_back() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        let pts: Vec<_> = (0..10).map(|i| Point2::new(1.0, i as f64 * 0.1)).collect();
+        let m = Moments::from_points(&pts);
+        map.insert(&line_from_moments(&m, &pts[0], &pts[9]).unwrap(), &m);
+        let mut record = MapRecord::from_map(&map);
+        record.lines[0].covariance = [f64::INFINITY, 0.0, f64::NEG_INFINITY, f64::NAN];
+        let json = serde_json::to_string(&record).unwrap();
+        assert!(json.contains(r#""covariance":["inf",0.0,"-inf","nan"]"#), "{json}");
+        let back: MapRecord = serde_json::from_str(&json).unwrap();
+        let c = back.lines[0].covariance;
+        assert!(c[0] == f64::INFINITY && c[1] == 0.0 && c[2] == f64::NEG_INFINITY && c[3].is_nan());
+        let bad = json.replace(r#""inf",0.0"#, r#""big",0.0"#);
+        let e = serde_json::from_str::<MapRecord>(&bad).unwrap_err().to_string();
+        assert!(e.contains("\"big\""), "{e}");
     }
 }

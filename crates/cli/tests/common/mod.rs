@@ -10,6 +10,14 @@ pub fn pcaline(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_pcaline")).args(args).output().expect("pcaline runs")
 }
 
+/// The objects of JSON Lines output (`pcaline detect` on stdout).
+pub fn json_lines(text: &[u8]) -> Vec<serde_json::Value> {
+    String::from_utf8_lossy(text)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect()
+}
+
 pub fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("pcaline-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
