@@ -5,6 +5,7 @@
 
 use crate::config_file::{NamedConfig, PRESETS, resolve};
 use crate::exit::BadInput;
+use crate::out::{out, outln};
 use anyhow::{Context, Result};
 use pcaline::aiding::{AidingConfig, AidingMode, SensorLine};
 use pcaline::{LineDetector, LineSegment};
@@ -27,6 +28,12 @@ const SCENES: [(&str, &str); 4] = [
 
 /// Arguments of `pcaline eval`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:
+  pcaline eval                                    the shipped scenes at 10 and 30 mm
+  pcaline eval --scene my-maze.toml --sigma-mm 20 --config default --config adaptive
+  pcaline eval --no-localization --oracle --seeds 5
+  pcaline eval --real --drift-grid --json         the shared real logs
+  pcaline eval --show-config default > mine.toml  a configuration file to edit")]
 pub struct EvalArgs {
     /// Range noise of the simulated sensor, millimetres (repeat for several).
     #[arg(long = "sigma-mm", default_values_t = [10.0, 30.0])]
@@ -207,7 +214,7 @@ fn scenes(files: &[std::path::PathBuf]) -> Result<Vec<Scene>> {
 /// Runs `pcaline eval`.
 pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
     if let Some(name) = &args.show_config {
-        print!("{}", crate::config_file::show(name)?);
+        out!("{}", crate::config_file::show(name)?)?;
         return Ok(());
     }
     if args.real {
@@ -225,9 +232,9 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
             args.drift_grid,
         )?;
         if args.json {
-            println!("{}", serde_json::to_string_pretty(&report)?);
+            outln!("{}", serde_json::to_string_pretty(&report)?)?;
         } else {
-            print_real(&report);
+            print_real(&report)?;
         }
         return Ok(());
     }
@@ -264,15 +271,15 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
         report.localization = localization_rows(&scenes, args.seeds, &configs, quiet)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
         return Ok(());
     }
-    print_detection(&report.detection, specs.len() == 2 && !args.oracle);
+    print_detection(&report.detection, specs.len() == 2 && !args.oracle)?;
     if !report.localization.is_empty() {
-        print_localization(&report.localization, args.seeds);
+        print_localization(&report.localization, args.seeds)?;
     }
-    print_fit_accuracy(&args.sigma_mm);
-    print_range_bearing();
+    print_fit_accuracy(&args.sigma_mm)?;
+    print_range_bearing()?;
     Ok(())
 }
 
@@ -456,12 +463,12 @@ impl Pooled {
     }
 }
 
-fn print_localization(rows: &[LocalizationRow], seeds: u64) {
-    println!();
-    println!(
+fn print_localization(rows: &[LocalizationRow], seeds: u64) -> anyhow::Result<()> {
+    outln!()?;
+    outln!(
         "Mapping and localization: every scene as shipped, {seeds} seed(s), whole trajectories; errors pooled over all scans"
-    );
-    println!(
+    )?;
+    outln!(
         "{:<22} {:<18} {:>7} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8}",
         "config",
         "aiding",
@@ -474,9 +481,9 @@ fn print_localization(rows: &[LocalizationRow], seeds: u64) {
         "line rms",
         "spurious",
         "covered"
-    );
+    )?;
     for r in rows {
-        println!(
+        outln!(
             "{:<22} {:<18} {:>7} {:>9.3} ° {:>9.3} ° {:>7.3} m {:>7.3} m {:>9} {:>6.1}cm {:>8} {:>7.1}%",
             r.config,
             r.aiding,
@@ -489,27 +496,35 @@ fn print_localization(rows: &[LocalizationRow], seeds: u64) {
             r.map_line_error_rms_m * 100.0,
             r.map_spurious_lines,
             100.0 * r.map_covered_fraction
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// Fit accuracy against the Cramer-Rao bound and covariance consistency, for
 /// walls of 1, 2 and 5 m sampled as a UTM-30LX-EW at 5 m (2.2 cm spacing).
-fn print_fit_accuracy(sigmas_mm: &[f64]) {
-    println!();
-    println!(
+fn print_fit_accuracy(sigmas_mm: &[f64]) -> anyhow::Result<()> {
+    outln!()?;
+    outln!(
         "Fit accuracy (PCA, 4000 runs a row, noise across the wall) against the Cramer-Rao bound"
-    );
-    println!(
+    )?;
+    outln!(
         "{:>6} {:>6} {:>6} {:>12} {:>12} {:>12} {:>12} {:>9}",
-        "sigma", "L m", "points", "std alpha", "CRB alpha", "std offset", "CRB offset", "NEES"
-    );
+        "sigma",
+        "L m",
+        "points",
+        "std alpha",
+        "CRB alpha",
+        "std offset",
+        "CRB offset",
+        "NEES"
+    )?;
     for &sigma_mm in sigmas_mm {
         for length in [1.0, 2.0, 5.0] {
             let n = (length / (5.0 * 0.25f64.to_radians())) as usize + 1;
             let r = pcaline_eval::fit_accuracy(n, length, sigma_mm / 1000.0, 4000, 1);
             let expected_nees = 2.0 * (n as f64 - 2.0) / (n as f64 - 4.0);
-            println!(
+            outln!(
                 "{:>4}mm {:>6} {:>6} {:>10.4}° {:>10.4}° {:>10.2}mm {:>10.2}mm {:>5.2}/{:.2}",
                 sigma_mm,
                 length,
@@ -520,18 +535,19 @@ fn print_fit_accuracy(sigmas_mm: &[f64]) {
                 r.crb_offset_m * 1e3,
                 r.mean_nees,
                 expected_nees
-            );
+            )?;
         }
     }
+    Ok(())
 }
 
 /// The unweighted and the weighted fit under range-and-bearing noise.
-fn print_range_bearing() {
-    println!();
-    println!(
+fn print_range_bearing() -> anyhow::Result<()> {
+    outln!()?;
+    outln!(
         "Range-and-bearing noise (a wall 4-14 m away at oblique incidence; range noise 10 mm below 10 m, 30 mm beyond; 4000 runs)"
-    );
-    println!(
+    )?;
+    outln!(
         "{:>13} {:>6} {:>15} {:>15} {:>11} {:>9} {:>13}",
         "sigma bearing",
         "beams",
@@ -540,10 +556,10 @@ fn print_range_bearing() {
         "CRB alpha",
         "NEES PCA",
         "NEES weighted"
-    );
+    )?;
     for sigma_bearing_deg in [0.0f64, 0.05, 0.1] {
         let r = pcaline_eval::range_bearing_accuracy(sigma_bearing_deg.to_radians(), 4000, 1);
-        println!(
+        outln!(
             "{:>12}° {:>6} {:>14.4}° {:>14.4}° {:>10.4}° {:>9.2} {:>13.2}",
             sigma_bearing_deg,
             r.n,
@@ -552,12 +568,13 @@ fn print_range_bearing() {
             r.crb_alpha_rad.to_degrees(),
             r.nees_pca,
             r.nees_weighted
-        );
+        )?;
     }
+    Ok(())
 }
 
-fn print_detection(rows: &[Row], compare: bool) {
-    println!(
+fn print_detection(rows: &[Row], compare: bool) -> anyhow::Result<()> {
+    outln!(
         "{:>6}  {:<22} {:>6} {:>6} {:>7} {:>6} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>9}",
         "sigma",
         "config",
@@ -573,9 +590,9 @@ fn print_detection(rows: &[Row], compare: bool) {
         "end med",
         "end rms",
         "us/scan"
-    );
+    )?;
     for r in rows {
-        println!(
+        outln!(
             "{:>4}mm  {:<22} {:>6} {:>6} {:>7.3} {:>6.3} {:>6.2} {:>8.3}° {:>8.3}° {:>6.1}mm {:>6.1}mm {:>6.1}mm {:>6.1}mm {:>9.1}",
             r.sigma_mm,
             r.config,
@@ -591,13 +608,13 @@ fn print_detection(rows: &[Row], compare: bool) {
             r.endpoint_median_mm,
             r.endpoint_rms_mm,
             r.time_per_scan_us
-        );
+        )?;
     }
     if compare {
         // Two configurations: the second minus the first, per noise level.
         for pair in rows.chunks(2) {
             let [a, b] = pair else { continue };
-            println!(
+            outln!(
                 "{:>4}mm  {:<22} {:>6} {:>6} {:>+7.3} {:>+6.3} {:>+6.2} {:>+8.3}° {:>+8.3}° {:>+6.1}mm {:>+6.1}mm {:>+6.1}mm {:>+6.1}mm {:>+9.1}",
                 a.sigma_mm,
                 "second - first",
@@ -613,40 +630,48 @@ fn print_detection(rows: &[Row], compare: bool) {
                 b.endpoint_median_mm - a.endpoint_median_mm,
                 b.endpoint_rms_mm - a.endpoint_rms_mm,
                 b.time_per_scan_us - a.time_per_scan_us
-            );
+            )?;
         }
     }
-    println!();
-    println!("Recall by true wall length");
-    println!(
+    outln!()?;
+    outln!("Recall by true wall length")?;
+    outln!(
         "{:>6}  {:<22} {:>9} {:>9} {:>9} {:>9}",
-        "sigma", "config", "< 0.5 m", "0.5-1 m", "1-2 m", ">= 2 m"
-    );
+        "sigma",
+        "config",
+        "< 0.5 m",
+        "0.5-1 m",
+        "1-2 m",
+        ">= 2 m"
+    )?;
     for r in rows {
         let [a, b, c, d] = r.recall_by_length;
-        println!("{:>4}mm  {:<22} {a:>9.3} {b:>9.3} {c:>9.3} {d:>9.3}", r.sigma_mm, r.config);
+        outln!("{:>4}mm  {:<22} {a:>9.3} {b:>9.3} {c:>9.3} {d:>9.3}", r.sigma_mm, r.config)?;
     }
-    println!();
-    println!(
+    outln!()?;
+    outln!(
         "Lines off their surface: rms distance of each detected line from the nearest true wall, in noise sigmas"
-    );
-    println!("{:>6}  {:<22} {:>9} {:>9} {:>14}", "sigma", "config", "max", "99%", "lines > 3 sig");
+    )?;
+    outln!("{:>6}  {:<22} {:>9} {:>9} {:>14}", "sigma", "config", "max", "99%", "lines > 3 sig")?;
     for r in rows {
         let [max, p99] = r.surface_rms_sigmas_max_p99;
-        println!(
+        outln!(
             "{:>4}mm  {:<22} {max:>9.2} {p99:>9.2} {:>14}",
-            r.sigma_mm, r.config, r.lines_off_surface
-        );
+            r.sigma_mm,
+            r.config,
+            r.lines_off_surface
+        )?;
     }
+    Ok(())
 }
 
-fn print_real(r: &crate::eval_real::RealReport) {
-    println!("configuration: {}", r.config);
-    println!(
+fn print_real(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
+    outln!("configuration: {}", r.config)?;
+    outln!(
         "MIT CSAIL: {} scans with corrected poses; absolute errors after aligning at the first, and after the least-squares rigid alignment of all (rigid); relation metric between consecutive corrected scans",
         r.csail_pairs
-    );
-    println!(
+    )?;
+    outln!(
         "{:<32} {:>11} {:>11} {:>9} {:>9} {:>11} {:>9} {:>17} {:>17}",
         "trajectory",
         "heading rms",
@@ -657,10 +682,10 @@ fn print_real(r: &crate::eval_real::RealReport) {
         "rigid pos",
         "rel. trans (m)",
         "rel. rot (deg)"
-    );
+    )?;
     for t in &r.csail {
         let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
-        println!(
+        outln!(
             "{:<32} {:>9} ° {:>9} ° {:>7} m {:>7} m {:>9} ° {:>7} m {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
             t.name,
             f(t.heading_rms_deg),
@@ -673,19 +698,23 @@ fn print_real(r: &crate::eval_real::RealReport) {
             t.relations.translation_std_m,
             t.relations.rotation_mean_deg,
             t.relations.rotation_std_deg
-        );
+        )?;
     }
-    println!();
-    println!(
+    outln!()?;
+    outln!(
         "Intel: relation metric against intel.relations (drift seed {}; mean ± std)",
         r.intel_drift_seed
-    );
-    println!(
+    )?;
+    outln!(
         "{:<32} {:>9} {:>9} {:>17} {:>17}",
-        "trajectory", "relations", "unmatched", "trans (m)", "rot (deg)"
-    );
+        "trajectory",
+        "relations",
+        "unmatched",
+        "trans (m)",
+        "rot (deg)"
+    )?;
     for t in &r.intel {
-        println!(
+        outln!(
             "{:<32} {:>9} {:>9} {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
             t.name,
             t.relations.scored,
@@ -694,16 +723,20 @@ fn print_real(r: &crate::eval_real::RealReport) {
             t.relations.translation_std_m,
             t.relations.rotation_mean_deg,
             t.relations.rotation_std_deg
-        );
+        )?;
     }
-    println!();
-    println!(
-        "Own corrected poses as the source: how far each mode moves them (aided minus source)"
-    );
-    println!(
+    outln!()?;
+    outln!("Own corrected poses as the source: how far each mode moves them (aided minus source)")?;
+    outln!(
         "{:<22} {:<26} {:>11} {:>11} {:>9} {:>17} {:>17}",
-        "log", "mode", "heading rms", "heading max", "pos rms", "rel. trans (m)", "rel. rot (deg)"
-    );
+        "log",
+        "mode",
+        "heading rms",
+        "heading max",
+        "pos rms",
+        "rel. trans (m)",
+        "rel. rot (deg)"
+    )?;
     for m in &r.own_poses {
         let (t, rot) = m.relations.as_ref().map_or(("-".into(), "-".into()), |r| {
             (
@@ -711,17 +744,21 @@ fn print_real(r: &crate::eval_real::RealReport) {
                 format!("{:.3} ± {:.3}", r.rotation_mean_deg, r.rotation_std_deg),
             )
         });
-        println!(
+        outln!(
             "{:<22} {:<26} {:>9.3} ° {:>9.3} ° {:>7.3} m {:>17} {:>17}",
-            m.log, m.mode, m.heading_rms_deg, m.heading_max_deg, m.position_rms_m, t, rot
-        );
+            m.log,
+            m.mode,
+            m.heading_rms_deg,
+            m.heading_max_deg,
+            m.position_rms_m,
+            t,
+            rot
+        )?;
     }
     if !r.drift_grid.is_empty() {
-        println!();
-        println!(
-            "Intel drift grid: corrected poses + synthetic drift, against the corrected poses"
-        );
-        println!(
+        outln!()?;
+        outln!("Intel drift grid: corrected poses + synthetic drift, against the corrected poses")?;
+        outln!(
             "{:>10} {:>6} {:>5}  {:<26} {:>11} {:>9} {:>17} {:>17}",
             "bias °/s",
             "speed",
@@ -731,9 +768,9 @@ fn print_real(r: &crate::eval_real::RealReport) {
             "pos rms",
             "rel. trans (m)",
             "rel. rot (deg)"
-        );
+        )?;
         for c in &r.drift_grid {
-            println!(
+            outln!(
                 "{:>10.1} {:>5.0}% {:>5}  {:<26} {:>9.3} ° {:>7.3} m {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
                 c.heading_rate_bias_deg_s,
                 100.0 * c.speed_scale_error,
@@ -745,39 +782,43 @@ fn print_real(r: &crate::eval_real::RealReport) {
                 c.relations.translation_std_m,
                 c.relations.rotation_mean_deg,
                 c.relations.rotation_std_deg
-            );
+            )?;
         }
     }
-    println!();
+    outln!()?;
     let u = &r.utm;
     let [p10, p50, p90] = u.residual_std_p10_p50_p90_m;
-    println!(
+    outln!(
         "UTM-30LX-EW bag {}: {} scans, {} lines (median {} points)",
-        u.log, u.scans, u.lines, u.median_points
-    );
-    println!(
+        u.log,
+        u.scans,
+        u.lines,
+        u.median_points
+    )?;
+    outln!(
         "per-line residual std: 10% {:.1} mm, median {:.1} mm, 90% {:.1} mm; {:.1}% of lines under 2 cm",
         p10 * 1e3,
         p50 * 1e3,
         p90 * 1e3,
         100.0 * u.fraction_under_2cm
-    );
-    println!(
+    )?;
+    outln!(
         "LIDAR-only sharpness (occupied 5 cm cells, fewer is sharper): estimator {}, estimator without deskew {}, every scan at the first pose {}",
         u.occupied_cells_lidar_only,
         u.occupied_cells_lidar_only_without_deskew,
         u.occupied_cells_not_moving
-    );
-    println!();
-    println!("Detection on every shared log (scans with walls in view: 20 valid returns or more)");
-    print_detection_stats(&r.detection);
-    println!();
-    println!("The same, on each log's own sensor profile (--sensor)");
-    print_detection_stats(&r.detection_with_sensor);
+    )?;
+    outln!()?;
+    outln!("Detection on every shared log (scans with walls in view: 20 valid returns or more)")?;
+    print_detection_stats(&r.detection)?;
+    outln!()?;
+    outln!("The same, on each log's own sensor profile (--sensor)")?;
+    print_detection_stats(&r.detection_with_sensor)?;
+    Ok(())
 }
 
-fn print_detection_stats(rows: &[crate::eval_real::DetectionStats]) {
-    println!(
+fn print_detection_stats(rows: &[crate::eval_real::DetectionStats]) -> anyhow::Result<()> {
+    outln!(
         "{:<34} {:>10} {:>6} {:>8} {:>7} {:>10} {:>9}  {:>24} {:>9}",
         "log",
         "sensor",
@@ -788,10 +829,10 @@ fn print_detection_stats(rows: &[crate::eval_real::DetectionStats]) {
         "noise",
         "residual 10/50/90% (mm)",
         "grid"
-    );
+    )?;
     for d in rows {
         let [p10, p50, p90] = d.residual_std_p10_p50_p90_m;
-        println!(
+        outln!(
             "{:<34} {:>10} {:>6} {:>7.1}% {:>7.1} {:>9.1}% {:>6.1} mm  {:>8.1} {:>7.1} {:>7.1} {:>6.1} mm",
             d.log,
             d.sensor.as_deref().unwrap_or("-"),
@@ -804,6 +845,7 @@ fn print_detection_stats(rows: &[crate::eval_real::DetectionStats]) {
             p50 * 1e3,
             p90 * 1e3,
             d.range_step_m * 1e3
-        );
+        )?;
     }
+    Ok(())
 }

@@ -47,9 +47,17 @@ pub fn code_for(err: &anyhow::Error) -> ExitCode {
         }
         if let Some(io) = cause.downcast_ref::<IoError>() {
             return match io {
+                // A missing, unreadable or malformed file is the user's input
+                // (exit 2); a full disk or a failing device is not.
                 IoError::Io { source, .. }
-                    if source.kind() != std::io::ErrorKind::NotFound
-                        && source.kind() != std::io::ErrorKind::InvalidData =>
+                    if !matches!(
+                        source.kind(),
+                        std::io::ErrorKind::NotFound
+                            | std::io::ErrorKind::InvalidData
+                            | std::io::ErrorKind::PermissionDenied
+                            | std::io::ErrorKind::IsADirectory
+                            | std::io::ErrorKind::NotADirectory
+                    ) =>
                 {
                     ExitCode::from(1)
                 }
@@ -58,4 +66,23 @@ pub fn code_for(err: &anyhow::Error) -> ExitCode {
         }
     }
     ExitCode::from(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unreadable_or_missing_input_is_bad_input_and_a_full_disk_is_not() {
+        let code = |kind: std::io::ErrorKind| {
+            let e = anyhow::Error::from(IoError::io("f.json", std::io::Error::from(kind)));
+            format!("{:?}", code_for(&e))
+        };
+        let two = format!("{:?}", ExitCode::from(2));
+        let one = format!("{:?}", ExitCode::from(1));
+        for kind in [std::io::ErrorKind::NotFound, std::io::ErrorKind::PermissionDenied] {
+            assert_eq!(code(kind), two, "{kind:?}");
+        }
+        assert_eq!(code(std::io::ErrorKind::StorageFull), one);
+    }
 }

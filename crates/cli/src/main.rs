@@ -17,6 +17,7 @@ mod exit;
 mod log_args;
 mod map_cmd;
 mod mcap_out;
+mod out;
 mod picture;
 mod progress;
 mod reproduce;
@@ -85,26 +86,31 @@ fn count_at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
-/// Output piped into a reader that stops early (`pcaline eval | head`) makes
-/// `println!` panic with a broken pipe; like ripgrep, end quietly instead.
-fn quiet_on_broken_pipe() {
-    let default = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        let message = info
-            .payload()
-            .downcast_ref::<String>()
-            .map(String::as_str)
-            .or_else(|| info.payload().downcast_ref::<&str>().copied())
-            .unwrap_or("");
-        if message.contains("Broken pipe") {
-            std::process::exit(0);
+/// The error as one line: each cause in the chain once. A cause whose text
+/// its parent already ends with (an I/O error behind a message that quotes
+/// it) is not repeated.
+fn one_line(err: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if line.ends_with(&text) || line.contains(&format!("{text}: ")) {
+            continue;
         }
-        default(info);
-    }));
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }
 
 fn main() -> ExitCode {
-    quiet_on_broken_pipe();
+    // An interrupted write leaves no temporary file (exit 130, as a shell
+    // reports SIGINT).
+    let _ = ctrlc::set_handler(|| {
+        pcaline_io::remove_temporary_files();
+        std::process::exit(130);
+    });
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run::run(&args, cli.quiet),
@@ -119,8 +125,23 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) if err.is::<exit::StdoutClosed>() => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            eprintln!("error: {}", one_line(&err));
             exit::code_for(&err)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_error_chain_is_one_line_without_repeats() {
+        let io = std::io::Error::from(std::io::ErrorKind::NotFound);
+        let text = io.to_string();
+        let err = anyhow::Error::from(pcaline_io::IoError::io("a.json", io));
+        assert_eq!(one_line(&err), format!("a.json: {text}"));
+        let err = anyhow::anyhow!("inner").context("outer");
+        assert_eq!(one_line(&err), "outer: inner");
     }
 }

@@ -1,6 +1,7 @@
 //! `pcaline reproduce`: the paper's Tables 1-3 and `ETh` experiment, with the
 //! paper's values beside ours.
 
+use crate::out::outln;
 use crate::progress;
 use anyhow::Result;
 use clap::ValueEnum;
@@ -26,6 +27,9 @@ pub enum Which {
 
 /// Arguments of `pcaline reproduce`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:
+  pcaline reproduce all                           Tables 1-3 and the ETh experiment
+  pcaline reproduce table2 --runs 1000 --json")]
 pub struct ReproduceArgs {
     /// What to reproduce.
     #[arg(value_enum, default_value_t = Which::All)]
@@ -105,27 +109,27 @@ pub fn run(args: &ReproduceArgs, quiet: bool) -> Result<()> {
     if args.json {
         let rows: Vec<RowOut> = rows.iter().map(|(t, r)| row_out(*t, r)).collect();
         let eth: Vec<EthOut> = eth.iter().map(eth_out).collect();
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&serde_json::json!({ "rows": rows, "eth": eth }))?
-        );
+        )?;
         return Ok(());
     }
     for (t, _) in &tables {
-        print_table(*t, rows.iter().filter(|(tt, _)| tt == t).map(|(_, r)| r));
+        print_table(*t, rows.iter().filter(|(tt, _)| tt == t).map(|(_, r)| r))?;
     }
     if !eth.is_empty() {
-        println!("ETh experiment: a 0.75 m wall at 10 m, 0.25° beams, sigma 4 cm across it");
-        println!("{:>6} {:>7} {:>9} {:>10} {:>10}", "ETh", "points", "runs", "paper %", "ours %");
+        outln!("ETh experiment: a 0.75 m wall at 10 m, 0.25° beams, sigma 4 cm across it")?;
+        outln!("{:>6} {:>7} {:>9} {:>10} {:>10}", "ETh", "points", "runs", "paper %", "ours %")?;
         for e in &eth {
-            println!(
+            outln!(
                 "{:>6} {:>7} {:>9} {:>10.2} {:>10.3}",
                 e.experiment.eth,
                 e.points,
                 e.runs,
                 e.experiment.paper_percent,
                 e.percent()
-            );
+            )?;
         }
     }
     Ok(())
@@ -163,14 +167,14 @@ fn eth_out(e: &EthResult) -> EthOut {
     }
 }
 
-fn print_table<'a>(table: u8, rows: impl Iterator<Item = &'a FitRowResult>) {
+fn print_table<'a>(table: u8, rows: impl Iterator<Item = &'a FitRowResult>) -> anyhow::Result<()> {
     let title = match table {
         1 => "Table 1: PCA vs LS over spacing and count (sigma 4 cm)",
         2 => "Table 2: PCA vs LS over noise (n 20, spacing 5 cm, L 1 m)",
         _ => "Table 3: PCA vs LS over outliers (n 200, spacing 2.5 cm, L 5 m, sigma 4 cm)",
     };
-    println!("{title}");
-    println!(
+    outln!("{title}")?;
+    outln!(
         "{:>6} {:>5} {:>5} {:>6} {:>5} | {:>9} {:>9} | {:>10} {:>10} | {:>11} {:>11} | {:>9} {:>9}",
         "x_s m",
         "n",
@@ -185,12 +189,12 @@ fn print_table<'a>(table: u8, rows: impl Iterator<Item = &'a FitRowResult>) {
         "t LS paper",
         "t PCA us",
         "t LS us"
-    );
+    )?;
     for r in rows {
         let (tp, tl) = r.row.paper_times_ms.map_or(("-".to_string(), "-".to_string()), |(a, b)| {
             (format!("{a:.2} ms"), format!("{b:.2} ms"))
         });
-        println!(
+        outln!(
             "{:>6} {:>5} {:>5} {:>6} {:>5} | {:>9.3} {:>9.4} | {:>10.2e} {:>10.2e} | {:>11} {:>11} | {:>9.3} {:>9.3}",
             r.row.spacing_m,
             r.row.n,
@@ -205,7 +209,8 @@ fn print_table<'a>(table: u8, rows: impl Iterator<Item = &'a FitRowResult>) {
             tl,
             r.t_pca_ns / 1e3,
             r.t_ls_ns / 1e3
-        );
+        )?;
     }
-    println!();
+    outln!()?;
+    Ok(())
 }

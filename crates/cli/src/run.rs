@@ -6,6 +6,7 @@
 
 use crate::exit::BadInput;
 use crate::mcap_out::McapOut;
+use crate::out::outln;
 use crate::picture::write_svg_and_png;
 use crate::progress;
 use crate::scene_cmd::draw_scene;
@@ -28,6 +29,11 @@ const DEFAULT_SCENE_NAME: &str = "sim-scenes/paper-maze.toml";
 
 /// Arguments of `pcaline run`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:
+  pcaline run                                     the embedded maze, pictures in out/run
+  pcaline run sim-scenes/hall-pillars.toml --seed 3 --out out/hall --png
+  pcaline run my-maze.toml --config paper --json  the paper's detector and aiding
+  pcaline run --mcap out/run.mcap                 every scan, map and pose for Foxglove")]
 pub struct RunArgs {
     /// Scene file (TOML or JSON); the embedded paper-like maze when absent.
     scene: Option<PathBuf>,
@@ -268,9 +274,9 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         outputs,
     };
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     } else {
-        print_summary(&summary);
+        print_summary(&summary)?;
     }
     Ok(())
 }
@@ -383,18 +389,18 @@ fn draw_heading_error(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
     plot.finish("Heading error against the truth")
 }
 
-fn print_summary(s: &Summary) {
-    println!("scene                {}", s.scene);
-    println!("seed / preset        {} / {}", s.seed, s.preset);
-    println!("scans                {} ({:.1} s)", s.scans, s.duration_s);
-    println!(
+fn print_summary(s: &Summary) -> anyhow::Result<()> {
+    outln!("scene                {}", s.scene)?;
+    outln!("seed / preset        {} / {}", s.seed, s.preset)?;
+    outln!("scans                {} ({:.1} s)", s.scans, s.duration_s)?;
+    outln!(
         "lines per scan       {:.1} (median residual std {:.1} mm)",
         s.lines_per_scan_mean,
         1e3 * s.median_residual_std_m
-    );
-    println!("detection time       {:.1} us per scan", s.detection_time_per_scan_us);
-    println!();
-    println!(
+    )?;
+    outln!("detection time       {:.1} us per scan", s.detection_time_per_scan_us)?;
+    outln!()?;
+    outln!(
         "{:<17} {:>12} {:>12} {:>12} {:>12} {:>9} {:>11} {:>9} {:>9}",
         "aiding",
         "heading rms",
@@ -405,9 +411,9 @@ fn print_summary(s: &Summary) {
         "worst line",
         "off wall",
         "covered"
-    );
+    )?;
     for m in &s.modes {
-        println!(
+        outln!(
             "{:<17} {:>10.3} ° {:>10.3} ° {:>10.3} m {:>10.3} m {:>9} {:>8.1} cm {:>9} {:>8.1}%",
             m.mode,
             m.heading_rms_deg,
@@ -418,10 +424,11 @@ fn print_summary(s: &Summary) {
             100.0 * m.map_worst_line_m,
             m.map_lines_off_wall,
             100.0 * m.map_covered_fraction
-        );
+        )?;
     }
-    println!();
+    outln!()?;
     for o in &s.outputs {
-        println!("wrote                {o}");
+        outln!("wrote                {o}")?;
     }
+    Ok(())
 }

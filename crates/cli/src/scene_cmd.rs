@@ -1,6 +1,7 @@
 //! `pcaline scene generate|check|draw`.
 
 use crate::exit::BadInput;
+use crate::out::outln;
 use crate::svg::{Mark, Plot};
 use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
@@ -12,14 +13,20 @@ use std::path::PathBuf;
 #[derive(Debug, Subcommand)]
 pub enum SceneCommand {
     /// Write a random maze scene (TOML or JSON by extension).
+    #[command(after_help = "Example:
+  pcaline scene generate --seed 7 --cols 6 --rows 4 -o my-maze.toml")]
     Generate(GenerateArgs),
     /// Validate scene files; prints one line per file.
+    #[command(after_help = "Example:
+  pcaline scene check sim-scenes/*.toml")]
     Check {
         /// Scene files.
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
     /// Draw a scene and its trajectory as SVG.
+    #[command(after_help = "Example:
+  pcaline scene draw my-maze.toml -o my-maze.svg")]
     Draw {
         /// Scene file.
         file: PathBuf,
@@ -121,15 +128,15 @@ pub fn run(cmd: &SceneCommand, quiet: bool) -> Result<()> {
             let mut failed = 0;
             for f in files {
                 match read_scene(f) {
-                    Ok(s) => println!(
+                    Ok(s) => outln!(
                         "ok    {}: \"{}\", {} wall segments, {} waypoints",
                         f.display(),
                         s.name,
                         s.world_walls().len(),
                         s.trajectory.waypoints.len()
-                    ),
+                    )?,
                     Err(e) => {
-                        println!("error {e}");
+                        outln!("error {e}")?;
                         failed += 1;
                     }
                 }
