@@ -4,14 +4,17 @@
 use crate::exit::BadInput;
 use crate::log_args::LogArgs;
 use crate::mcap_out::McapOut;
-use crate::picture::write_svg_and_png;
+use crate::out::outln;
+use crate::picture::svg_to_png;
 use crate::progress;
 use crate::svg::{Mark, Plot};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::ValueEnum;
 use pcaline::LineDetector;
 use pcaline::aiding::{AidingMode, EdgeKind, Localizer, LoopOutcome, SensorLine};
-use pcaline_io::{LogRecord, PoseKind, read_log, write_json, write_map_csv, write_map_json};
+use pcaline_io::{
+    LogRecord, OutputSet, PoseKind, json_bytes, map_csv_text, map_json_bytes, read_log,
+};
 use serde::Serialize;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -31,6 +34,11 @@ pub enum AidingArg {
 
 /// Arguments of `pcaline map`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:
+  pcaline map intel.gfs.log --out out/intel --png       map, trajectory, graph, pictures
+  pcaline map raw.clf --translation-noise-per-m 0.1     a noisier odometry
+  pcaline map bag_dir --mcap out/run.mcap                also every scan for Foxglove
+  pcaline map log.clf --aiding heading --no-loop-closure   the paper's aiding alone")]
 pub struct MapArgs {
     /// Log with scans (CARMEN, ROS 1 bag, ROS 2 bag or folder, MCAP, JSON, CSV).
     log: PathBuf,
@@ -169,34 +177,29 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         return Err(BadInput(format!("{}: no scans", args.log.display())).into());
     }
     let graph = finish(&mut aiding, &mut poses);
-    let mcap_path = match mcap {
-        Some(mut m) => {
-            m.final_map(aiding.map())?;
-            Some(m.finish(quiet)?)
-        }
-        None => None,
-    };
-    std::fs::create_dir_all(&args.out)?;
-    let map_path = args.out.join("map.json");
-    write_map_json(&map_path, aiding.map())?;
-    let map_csv = args.out.join("map.csv");
-    write_map_csv(&map_csv, aiding.map())?;
-    let traj_path = args.out.join("trajectory.json");
-    write_json(&traj_path, &poses)?;
-    let graph_path = match &graph {
-        Some(g) => {
-            let path = args.out.join("graph.json");
-            write_json(&path, g)?;
-            Some(path)
-        }
-        None => None,
-    };
-    let pictures = write_svg_and_png(
-        &args.out,
-        "map",
-        &draw(aiding.map(), &poses, graph.as_ref(), &args.log.display().to_string()),
-        args.png,
-    )?;
+    if let Some(m) = mcap.as_mut() {
+        m.final_map(aiding.map())?;
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating the output folder {}", args.out.display()))?;
+    // Written as a set: a failure part-way (a full disk) leaves none of them.
+    let mut outputs = OutputSet::new();
+    let path = args.out.join("map.json");
+    outputs.add(&path, &map_json_bytes(&path, aiding.map())?)?;
+    outputs.add(&args.out.join("map.csv"), map_csv_text(aiding.map()).as_bytes())?;
+    let path = args.out.join("trajectory.json");
+    outputs.add(&path, &json_bytes(&path, &poses)?)?;
+    if let Some(g) = &graph {
+        let path = args.out.join("graph.json");
+        outputs.add(&path, &json_bytes(&path, g)?)?;
+    }
+    let svg = draw(aiding.map(), &poses, graph.as_ref(), &args.log.display().to_string());
+    outputs.add(&args.out.join("map.svg"), svg.as_bytes())?;
+    if args.png {
+        outputs.add(&args.out.join("map.png"), &svg_to_png(&svg)?)?;
+    }
+    let written = outputs.commit()?;
+    let mcap_path = mcap.map(|m| m.finish(quiet)).transpose()?;
     if !quiet {
         eprintln!(
             "{}: {} scans, {} map lines, {} occupied 5 cm cells (every return placed with the \
@@ -226,12 +229,8 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             }
         );
     }
-    println!("{}\n{}\n{}", map_path.display(), map_csv.display(), traj_path.display());
-    for p in graph_path.iter().chain(&mcap_path) {
-        println!("{}", p.display());
-    }
-    for p in pictures {
-        println!("{}", p.display());
+    for p in written.iter().chain(&mcap_path) {
+        outln!("{}", p.display())?;
     }
     Ok(())
 }

@@ -9,6 +9,34 @@ use crate::IoError;
 use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The temporary files of every [`AtomicFile`] not yet committed or
+/// dropped, for [`remove_temporary_files`].
+static TEMPORARY: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn register(tmp: &Path) {
+    if let Ok(mut t) = TEMPORARY.lock() {
+        t.push(tmp.to_path_buf());
+    }
+}
+
+fn unregister(tmp: &Path) {
+    if let Ok(mut t) = TEMPORARY.lock() {
+        t.retain(|p| p != tmp);
+    }
+}
+
+/// Removes the temporary file of every [`AtomicFile`] still being written.
+/// For a signal handler (SIGINT, SIGTERM) that ends the process, which runs
+/// no destructor: without it an interrupted write leaves its `.tmp` file.
+pub fn remove_temporary_files() {
+    if let Ok(t) = TEMPORARY.lock() {
+        for p in t.iter() {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
 
 /// A file being written atomically: every byte goes to a temporary file in
 /// the target's folder, and [`AtomicFile::commit`] flushes, syncs and renames
@@ -39,7 +67,10 @@ impl AtomicFile {
             Ok(m) if m.is_dir() => {
                 return Err(IoError::io(
                     shown,
-                    std::io::Error::other("is a directory, not a file to write"),
+                    std::io::Error::new(
+                        std::io::ErrorKind::IsADirectory,
+                        "is a directory, not a file to write",
+                    ),
                 ));
             }
             Ok(m) if !m.is_file() => {
@@ -68,6 +99,7 @@ impl AtomicFile {
         let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
         let file = File::create(&tmp).map_err(|e| IoError::io(shown, e))?;
+        register(&tmp);
         Ok(AtomicFile {
             target: target.to_path_buf(),
             tmp: Some(tmp),
@@ -97,6 +129,16 @@ impl AtomicFile {
         })();
         result.map_err(|e| IoError::io(&self.target, e))
         // Drop removes the temporary file if the rename did not happen.
+    }
+
+    /// Flushes and syncs what was written so far, so that a full disk shows
+    /// here rather than at [`AtomicFile::commit`].
+    pub fn sync(&mut self) -> Result<(), IoError> {
+        let result = self.writer().and_then(|w| {
+            w.flush()?;
+            w.get_ref().sync_all()
+        });
+        result.map_err(|e| IoError::io(&self.target, e))
     }
 
     fn writer(&mut self) -> std::io::Result<&mut BufWriter<File>> {
@@ -131,7 +173,61 @@ impl Drop for AtomicFile {
         self.writer.take();
         if let Some(tmp) = &self.tmp {
             let _ = std::fs::remove_file(tmp);
+            unregister(tmp);
         }
+    }
+}
+
+/// Files written as a set (the outputs of `pcaline map`): each is written
+/// and synced to its temporary file first, and only when all of them are
+/// does [`OutputSet::commit`] rename them into place. A failure part-way (a
+/// full disk) leaves none of them, instead of some.
+#[derive(Debug, Default)]
+pub struct OutputSet {
+    files: Vec<AtomicFile>,
+}
+
+impl OutputSet {
+    /// An empty set.
+    pub fn new() -> Self {
+        OutputSet::default()
+    }
+
+    /// Writes `bytes` to `path`'s temporary file and syncs it.
+    pub fn add(&mut self, path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+        let mut file = AtomicFile::create(path)?;
+        file.write_all(bytes).map_err(|e| IoError::io(path, e))?;
+        file.sync()?;
+        self.files.push(file);
+        Ok(())
+    }
+
+    /// Renames every file into place; returns their paths, in the order
+    /// they were added. A rename that fails (rare once every file is
+    /// written) is an error that says which files were already in place.
+    pub fn commit(self) -> Result<Vec<PathBuf>, IoError> {
+        let mut done: Vec<PathBuf> = Vec::with_capacity(self.files.len());
+        for file in self.files {
+            let path = file.target().to_path_buf();
+            if let Err(e) = file.commit() {
+                return Err(match done.is_empty() {
+                    true => e,
+                    false => IoError::parse(
+                        &path,
+                        None,
+                        format!(
+                            "{e} (already written: {})",
+                            done.iter()
+                                .map(|p| p.display().to_string())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    ),
+                });
+            }
+            done.push(path);
+        }
+        Ok(done)
     }
 }
 
@@ -212,6 +308,27 @@ mod tests {
         write_atomic(&link, b"new").unwrap();
         assert!(link.is_symlink());
         assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_set_is_written_whole_or_not_at_all() {
+        let dir = std::env::temp_dir().join(format!("pcaline-atomic-set-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut set = OutputSet::new();
+        set.add(&dir.join("a.json"), b"a").unwrap();
+        // The second file cannot be written: the first is not left behind.
+        assert!(set.add(&dir.join("no-folder/b.json"), b"b").is_err());
+        drop(set);
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing left");
+        let mut set = OutputSet::new();
+        set.add(&dir.join("a.json"), b"a").unwrap();
+        set.add(&dir.join("b.json"), b"b").unwrap();
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2, "two temporary files");
+        assert!(!dir.join("a.json").exists());
+        let done = set.commit().unwrap();
+        assert_eq!(done, [dir.join("a.json"), dir.join("b.json")]);
+        assert_eq!(std::fs::read(dir.join("b.json")).unwrap(), b"b");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -24,7 +24,7 @@ mod ros;
 mod scan_text;
 mod scene_file;
 
-pub use atomic::{AtomicFile, write_atomic, write_atomic_with};
+pub use atomic::{AtomicFile, OutputSet, remove_temporary_files, write_atomic, write_atomic_with};
 pub use carmen::{CarmenOptions, CarmenReader};
 pub use error::IoError;
 pub use foxglove_mcap::{
@@ -33,8 +33,9 @@ pub use foxglove_mcap::{
 };
 pub use laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1, encode_laserscan_cdr};
 pub use lines_file::{
-    LineRecord, LinesFormat, LinesWriter, NoiseRecord, PoseSeries, ScanLines, lines_to_csv,
-    lines_to_json, read_map, read_pose_series, write_json, write_map_csv, write_map_json,
+    LineRecord, LinesFormat, LinesWriter, NoiseRecord, PoseSeries, ScanLines, json_bytes,
+    lines_to_csv, lines_to_json, map_csv_text, map_json_bytes, read_map, read_pose_series,
+    write_json, write_map_csv, write_map_json,
 };
 pub use log::{LogFormat, LogOptions, MAX_COORDINATE_M, check_record, check_scan_header, read_log};
 pub use pcaline_geometry::Relation;

@@ -103,9 +103,12 @@ impl LineRecord {
 
 /// Writes any serialisable value as compact JSON, atomically.
 pub fn write_json<T: Serialize + ?Sized>(path: &Path, value: &T) -> Result<(), IoError> {
-    let bytes = serde_json::to_vec(value)
-        .map_err(|e| IoError::parse(path, None, format!("cannot encode: {e}")))?;
-    write_atomic(path, &bytes)
+    write_atomic(path, &json_bytes(path, value)?)
+}
+
+/// `value` as compact JSON, for `path` (named in the error).
+pub fn json_bytes<T: Serialize + ?Sized>(path: &Path, value: &T) -> Result<Vec<u8>, IoError> {
+    serde_json::to_vec(value).map_err(|e| IoError::parse(path, None, format!("cannot encode: {e}")))
 }
 
 /// How [`LinesWriter`] writes the lines of a log.
@@ -251,13 +254,22 @@ fn write_csv_rows(out: &mut impl Write, scan: &ScanLines) -> std::io::Result<()>
 
 /// Writes a map as JSON (the [`MapRecord`] form, loadable with [`read_map`]).
 pub fn write_map_json(path: &Path, map: &LineMap) -> Result<(), IoError> {
-    let text = serde_json::to_string_pretty(&MapRecord::from_map(map))
-        .map_err(|e| IoError::parse(path, None, format!("cannot encode the map: {e}")))?;
-    write_atomic(path, text.as_bytes())
+    write_atomic(path, &map_json_bytes(path, map)?)
+}
+
+/// A map as the JSON of [`write_map_json`], for `path` (named in the error).
+pub fn map_json_bytes(path: &Path, map: &LineMap) -> Result<Vec<u8>, IoError> {
+    serde_json::to_vec_pretty(&MapRecord::from_map(map))
+        .map_err(|e| IoError::parse(path, None, format!("cannot encode the map: {e}")))
 }
 
 /// Writes a map as CSV, one row per map line.
 pub fn write_map_csv(path: &Path, map: &LineMap) -> Result<(), IoError> {
+    write_atomic(path, map_csv_text(map).as_bytes())
+}
+
+/// A map as the CSV of [`write_map_csv`].
+pub fn map_csv_text(map: &LineMap) -> String {
     let mut s = String::from(
         "id,alpha_rad,d_m,start_x,start_y,end_x,end_y,length_m,n_points,observations,residual_std_m\n",
     );
@@ -279,7 +291,7 @@ pub fn write_map_csv(path: &Path, map: &LineMap) -> Result<(), IoError> {
             l.residual_std
         );
     }
-    write_atomic(path, s.as_bytes())
+    s
 }
 
 /// Reads a map written by [`write_map_json`].

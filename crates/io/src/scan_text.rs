@@ -49,11 +49,83 @@ struct BearingsJson {
     bearings: Vec<f64>,
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug)]
 enum AnyScan {
     Full(ScanJson),
     Bearings(BearingsJson),
+}
+
+impl AnyScan {
+    /// The scan of a JSON value: the bearings form when it has `bearings`,
+    /// else pcaline's form. The error names the field (`ranges[3]: invalid
+    /// type: string "NaN", expected f32`, `unknown field \`foo\``).
+    fn from_value(value: serde_json::Value) -> Result<AnyScan, String> {
+        use serde_json::Value;
+        let kind = match &value {
+            Value::Object(o) => {
+                let bearings = o.contains_key("bearings");
+                let named = |e: serde_path_to_error::Error<serde_json::Error>| {
+                    let at = e.path().to_string();
+                    if at == "." { e.inner().to_string() } else { format!("{at}: {}", e.inner()) }
+                };
+                return if bearings {
+                    serde_path_to_error::deserialize(value).map(AnyScan::Bearings).map_err(named)
+                } else {
+                    serde_path_to_error::deserialize(value).map(AnyScan::Full).map_err(named)
+                };
+            }
+            Value::Null => "null",
+            Value::Bool(_) => "a boolean",
+            Value::Number(_) => "a number",
+            Value::String(_) => "a string",
+            Value::Array(_) => "an array",
+        };
+        Err(format!("expected a scan object, found {kind}"))
+    }
+}
+
+/// Where the newlines a reader has given out are, for the line of each
+/// value of a JSON stream.
+#[derive(Debug, Default, Clone, Copy)]
+struct Newlines {
+    /// Bytes given out.
+    read: usize,
+    /// Newlines among them.
+    count: usize,
+    /// Offset of the last one.
+    last_at: Option<usize>,
+}
+
+impl Newlines {
+    /// The 1-based line of the byte before `offset` (a value's end, as
+    /// `StreamDeserializer::byte_offset` gives it): serde_json may have read
+    /// one byte past the value (the newline after `null` or a number).
+    fn line_ending_at(&self, offset: usize) -> usize {
+        let past = self.last_at.is_some_and(|at| at >= offset) as usize;
+        self.count - past + 1
+    }
+}
+
+/// A reader that records [`Newlines`].
+struct LineCounting<R> {
+    inner: R,
+    newlines: std::rc::Rc<std::cell::Cell<Newlines>>,
+}
+
+impl<R: std::io::Read> std::io::Read for LineCounting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        let mut seen = self.newlines.get();
+        for (k, b) in buf[..n].iter().enumerate() {
+            if *b == b'\n' {
+                seen.count += 1;
+                seen.last_at = Some(seen.read + k);
+            }
+        }
+        seen.read += n;
+        self.newlines.set(seen);
+        Ok(n)
+    }
 }
 
 impl From<&Scan> for ScanJson {
@@ -121,6 +193,9 @@ pub fn read_scan_json(
 ) -> Result<usize, IoError> {
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
     let mut reader = std::io::BufReader::new(file);
+    // Blank lines before the first value are consumed here: their count
+    // keeps line numbers right.
+    let mut skipped_lines = 0;
     let first = loop {
         let buf = reader.fill_buf().map_err(|e| IoError::io(path, e))?;
         match buf.iter().position(|b| !b.is_ascii_whitespace()) {
@@ -128,6 +203,7 @@ pub fn read_scan_json(
             None if buf.is_empty() => break None,
             None => {
                 let n = buf.len();
+                skipped_lines += buf.iter().filter(|b| **b == b'\n').count();
                 reader.consume(n);
             }
         }
@@ -147,9 +223,10 @@ pub fn read_scan_json(
     match first {
         None => return Err(IoError::parse(path, Some(1), "empty file: no scan")),
         Some(b'[') => {
-            let all: Vec<AnyScan> = serde_json::from_reader(reader).map_err(parse_err)?;
-            for (i, s) in all.into_iter().enumerate() {
-                let scan = to_scan(s)
+            let all: Vec<serde_json::Value> = serde_json::from_reader(reader).map_err(parse_err)?;
+            for (i, value) in all.into_iter().enumerate() {
+                let scan = AnyScan::from_value(value)
+                    .and_then(to_scan)
                     .map_err(|m| IoError::parse(path, None, format!("scan {}: {m}", i + 1)))?;
                 if emit(scan, i + 1).is_break() {
                     break;
@@ -157,12 +234,22 @@ pub fn read_scan_json(
             }
         }
         Some(_) => {
-            let stream = serde_json::Deserializer::from_reader(reader).into_iter::<AnyScan>();
-            for (i, item) in stream.enumerate() {
-                let s = item.map_err(parse_err)?;
-                let scan = to_scan(s)
-                    .map_err(|m| IoError::parse(path, None, format!("scan {}: {m}", i + 1)))?;
-                if emit(scan, i + 1).is_break() {
+            let newlines = std::rc::Rc::new(std::cell::Cell::new(Newlines::default()));
+            let counting = LineCounting { inner: reader, newlines: newlines.clone() };
+            let mut stream =
+                serde_json::Deserializer::from_reader(counting).into_iter::<serde_json::Value>();
+            let mut i = 0;
+            while let Some(item) = stream.next() {
+                let value = item.map_err(|e| {
+                    IoError::parse(path, Some(e.line() + skipped_lines), e.to_string())
+                })?;
+                // The line the value ends on.
+                let line = skipped_lines + newlines.get().line_ending_at(stream.byte_offset());
+                i += 1;
+                let scan = AnyScan::from_value(value)
+                    .and_then(to_scan)
+                    .map_err(|m| IoError::parse(path, Some(line), format!("scan {i}: {m}")))?;
+                if emit(scan, i).is_break() {
                     break;
                 }
             }
@@ -272,4 +359,56 @@ pub fn scans_to_csv<'a>(scans: impl IntoIterator<Item = &'a Scan>) -> String {
         out.push('\n');
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn first_error(name: &str, text: &str) -> String {
+        let path = std::env::temp_dir().join(format!("pcaline-{}-{name}", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        let result = read_scan_json(&path, &mut |_| ControlFlow::Continue(()));
+        std::fs::remove_file(&path).unwrap();
+        result.unwrap_err().to_string()
+    }
+
+    /// Each fault names its field and, in JSON Lines, its line (the
+    /// untagged form said only "did not match any variant" at line 0).
+    #[test]
+    fn malformed_scans_name_the_field_and_the_line() {
+        let good = r#"{"angle_min": -0.5, "angle_increment": 0.01, "range_min": 0.1, "range_max": 30.0, "ranges": [1.0, 2.0]}"#;
+        let cases = [
+            (
+                r#"{"angle_min": -0.5, "angle_increment": 0.01, "range_min": 0.1, "range_max": 30.0, "ranges": [1.0], "colour": 1}"#,
+                "unknown field `colour`",
+            ),
+            (
+                r#"{"angle_min": -0.5, "angle_increment": 0.01, "range_min": 0.1, "range_max": 30.0}"#,
+                "missing field `ranges`",
+            ),
+            (
+                r#"{"angle_min": -0.5, "angle_increment": 0.01, "range_min": 0.1, "range_max": 30.0, "ranges": [1.0, "NaN"]}"#,
+                "ranges[1]: invalid type: string \"NaN\"",
+            ),
+            (
+                r#"{"angle_min": "-0.5", "angle_increment": 0.01, "range_min": 0.1, "range_max": 30.0, "ranges": [1.0]}"#,
+                "angle_min: invalid type: string",
+            ),
+            (
+                r#"{"angle_min": -0.5, "angle_increment": 0.01, "range_min": 0.1, "range_max": 30.0, "ranges": "1 2"}"#,
+                "ranges: invalid type: string",
+            ),
+            ("null", "expected a scan object, found null"),
+            ("3", "expected a scan object, found a number"),
+            ("{}", "missing field"),
+            (r#"{"ranges": [1.0, 2.0], "bearings": [0.0, "x"]}"#, "bearings[1]: invalid type"),
+        ];
+        for (k, (bad, wanted)) in cases.iter().enumerate() {
+            let e = first_error(&format!("bad{k}.jsonl"), &format!("{good}\n{good}\n{bad}\n"));
+            assert!(e.contains(":3: scan 3: ") && e.contains(wanted), "{bad}: {e}");
+            let e = first_error(&format!("bad{k}.json"), &format!("[{good}, {bad}]"));
+            assert!(e.contains("scan 2: ") && e.contains(wanted), "{bad}: {e}");
+        }
+    }
 }
