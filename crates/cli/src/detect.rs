@@ -19,6 +19,11 @@ use std::path::PathBuf;
 
 /// Arguments of `pcaline detect`.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Examples:
+  pcaline detect scans.bag                        JSON Lines on stdout, one scan per line
+  pcaline detect log.clf --fov 180 -o lines.json  a CARMEN log of unusual beam counts
+  pcaline detect bag_dir --topic /scan --csv -o lines.csv
+  pcaline detect log.mcap --sensor rplidar --mcap lines.mcap   also for Foxglove")]
 pub struct DetectArgs {
     /// Log or scan file (CARMEN, ROS 1 bag, ROS 2 bag or folder, MCAP, JSON, CSV).
     file: PathBuf,

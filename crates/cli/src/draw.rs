@@ -17,10 +17,15 @@ use std::path::PathBuf;
 pub enum DrawCommand {
     /// One scan of a log: points, level-1 and level-2 break-points, clusters
     /// and lines, in the sensor frame (the paper's Figures 1-3).
+    #[command(after_help = "Examples:
+  pcaline draw scan scans.db3 --index 40 -o scan.svg
+  pcaline draw scan log.clf --fov 180 --config paper -o scan.png")]
     Scan(ScanArgs),
     /// A saved map (map.json of `run` or `map`) with the trajectories of a
     /// trajectory file (scans.json of `run`, trajectory.json of `map`): the
     /// paper's Figure 10.
+    #[command(after_help = "Example:
+  pcaline draw map out/map/map.json --trajectory out/map/trajectory.json -o map.png")]
     Map {
         /// The map (JSON).
         map: PathBuf,
@@ -32,6 +37,8 @@ pub enum DrawCommand {
         output: PathBuf,
     },
     /// Headings over time from a trajectory file: the paper's Figure 11.
+    #[command(after_help = "Example:
+  pcaline draw heading out/run/scans.json -o heading.svg")]
     Heading {
         /// A trajectory file (scans.json of `run`, trajectory.json of `map`).
         trajectory: PathBuf,

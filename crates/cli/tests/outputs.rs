@@ -141,3 +141,76 @@ fn output_onto_a_device_writes_through_it_and_never_replaces_it() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("is a directory"));
 }
+
+#[test]
+fn an_interrupted_write_leaves_no_temporary_file() {
+    let log = carmen_log("interrupted.clf", 400_000);
+    let dir = tmp("interrupted");
+    std::fs::create_dir_all(&dir).unwrap();
+    for signal in ["-INT", "-TERM"] {
+        let target = dir.join("lines.json");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_pcaline"))
+            .args(["--quiet", "detect", s(&log), "--fov", "2", "-o", s(&target)])
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait for the temporary file, then interrupt the write.
+        let started = std::time::Instant::now();
+        while std::fs::read_dir(&dir).unwrap().count() == 0 {
+            assert!(child.try_wait().unwrap().is_none(), "detect ended before it was interrupted");
+            assert!(started.elapsed().as_secs() < 60, "no temporary file appeared");
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        let kill = Command::new("kill").args([signal, &child.id().to_string()]).status().unwrap();
+        assert!(kill.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(130), "{signal}");
+        let left: Vec<_> =
+            std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert!(left.is_empty(), "{signal} left {left:?}");
+    }
+}
+
+#[test]
+fn every_command_fails_cleanly_on_a_full_stdout() {
+    let scene = small_maze("full-maze.toml", 9);
+    let out_dir = tmp("full-run");
+    for args in [
+        vec!["eval", "--show-config", "default"],
+        vec!["--quiet", "run", s(&scene), "--out", s(&out_dir)],
+        vec!["scene", "check", s(&scene)],
+        vec!["reproduce", "table2", "--runs", "10"],
+    ] {
+        let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+        let out =
+            Command::new(env!("CARGO_BIN_EXE_pcaline")).args(&args).stdout(full).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("stdout") && !err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn every_subcommand_help_has_an_example() {
+    for args in [
+        vec!["run"],
+        vec!["detect"],
+        vec!["map"],
+        vec!["draw", "scan"],
+        vec!["draw", "map"],
+        vec!["draw", "heading"],
+        vec!["scene", "generate"],
+        vec!["scene", "check"],
+        vec!["scene", "draw"],
+        vec!["eval"],
+        vec!["reproduce"],
+    ] {
+        let mut all = args.clone();
+        all.push("--help");
+        let out = pcaline(&all);
+        assert!(out.status.success(), "{args:?}");
+        let help = String::from_utf8_lossy(&out.stdout);
+        let example = help.split_once("Example").map(|(_, e)| e).unwrap_or_default();
+        assert!(example.contains(&format!("pcaline {}", args.join(" "))), "{args:?}: {help}");
+    }
+}
