@@ -138,13 +138,23 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
     }
     let text = std::fs::read_to_string(path)
         .map_err(|e| BadInput(format!("{}: cannot read: {e}", path.display())))?;
+    let mut config = parse(path, &text, sigma_m)?;
+    config.name = spec.to_string();
+    Ok(config)
+}
+
+/// Parses the text of a configuration file: TOML, or JSON when `path` ends
+/// in `.json`; `path` names the file in every error. `sigma_m` is the range
+/// noise the `told-sigma` preset is told. Errors name the field path the
+/// file uses (`detector.fitting.eth`).
+pub fn parse(path: &Path, text: &str, sigma_m: f64) -> Result<NamedConfig> {
     // TOML values carry what a preset may hold (infinities) and JSON does not.
     let overrides: Value = if path.extension().is_some_and(|e| e == "json") {
-        let v: serde_json::Value = serde_json::from_str(&text)
+        let v: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| BadInput(format!("{}: not JSON: {e}", path.display())))?;
         Value::try_from(v).map_err(|e| BadInput(format!("{}: {e}", path.display())))?
     } else {
-        toml::from_str(&text).map_err(|e| BadInput(format!("{}: not TOML: {e}", path.display())))?
+        toml::from_str(text).map_err(|e| BadInput(format!("{}: not TOML: {e}", path.display())))?
     };
     let Some(base_name) = overrides.get("preset").and_then(Value::as_str) else {
         return Err(BadInput(format!(
@@ -195,7 +205,7 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
         .and_then(|()| file.loop_closure.validate())
         .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
     Ok(NamedConfig {
-        name: spec.to_string(),
+        name: path.display().to_string(),
         preset: base_name.to_string(),
         detector: file.detector,
         map: file.map,

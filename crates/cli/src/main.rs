@@ -8,12 +8,10 @@
 // The one crate that talks to a terminal.
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
-mod config_file;
 mod detect;
 mod draw;
 mod eval_cmd;
 mod eval_real;
-mod exit;
 mod log_args;
 mod map_cmd;
 mod mcap_out;
@@ -26,6 +24,7 @@ mod scene_cmd;
 mod svg;
 
 use clap::{Parser, Subcommand};
+use pcaline_cli::{config_file, exit};
 use std::process::ExitCode;
 
 /// PCA-based line detection from 2D LIDAR range data (Opromolla et al. 2017), and beyond.

@@ -1,0 +1,10 @@
+//! The Ros1Bag reader on arbitrary bytes: an error or a result, never a panic.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use pcaline_fuzz::read_every_way;
+use pcaline_io::LogFormat;
+
+fuzz_target!(|data: &[u8]| {
+    read_every_way("input.bag", LogFormat::Ros1Bag, data);
+});
