@@ -179,3 +179,37 @@ fn scenes_a_run_cannot_handle_fail_the_check() {
         refused(&["run", s(&path), "--out", s(&tmp("never"))], &[name, what]);
     }
 }
+
+#[test]
+fn files_without_scans_are_errors_not_empty_results() {
+    let text: String = (0..20_000).map(|k| format!("line {k} of plain text\n")).collect();
+    let cases: [(&str, &str); 7] = [
+        ("empty.clf", ""),
+        ("comments.clf", "# only\n# comments\n"),
+        ("odom-only.clf", "ODOM 0 0 0 0 0 0 1.0 gen 1.0\n"),
+        ("plain.txt", &text),
+        ("empty.csv", ""),
+        ("header-only.csv", "stamp_s,angle_min,angle_increment,range_min,range_max,r0\n"),
+        ("empty-array.json", "[]"),
+    ];
+    for (name, content) in cases {
+        let path = tmp(name);
+        std::fs::write(&path, content).unwrap();
+        let out = pcaline(&["detect", s(&path)]);
+        assert_eq!(out.status.code(), Some(2), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(out.stdout.is_empty(), "{name}: nothing on stdout");
+        assert!(String::from_utf8_lossy(&out.stderr).contains(name), "{name}");
+    }
+}
+
+#[test]
+fn a_grid_cell_too_small_to_index_is_refused() {
+    let config = tmp("tiny-cell.toml");
+    std::fs::write(&config, "preset = \"default\"\n[map]\ngrid_cell_m = 1e-9\n").unwrap();
+    let log = tmp("tiny-cell.clf");
+    std::fs::write(&log, "FLASER 3 2.0 2.0 2.0 0 0 0 0 0 0 1.0 host 1.0\n").unwrap();
+    refused(
+        &["map", s(&log), "--fov", "2", "--config", s(&config), "--out", s(&tmp("tiny-cell-out"))],
+        &["tiny-cell.toml", "map.grid_cell_m"],
+    );
+}
