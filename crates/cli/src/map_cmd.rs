@@ -180,8 +180,11 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     if let Some(m) = mcap.as_mut() {
         m.final_map(aiding.map())?;
     }
+    // An output folder that cannot be made (a file in its path, no
+    // permission) is the user's argument: exit 2, naming the folder.
     std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating the output folder {}", args.out.display()))?;
+        .map_err(|e| pcaline_io::IoError::io(&args.out, e))
+        .context("creating the output folder")?;
     // Written as a set: a failure part-way (a full disk) leaves none of them.
     let mut outputs = OutputSet::new();
     let path = args.out.join("map.json");

@@ -233,8 +233,11 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         })
         .collect();
 
+    // An output folder that cannot be made (a file in its path, no
+    // permission) is the user's argument: exit 2, naming the folder.
     std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating output folder {}", args.out.display()))?;
+        .map_err(|e| pcaline_io::IoError::io(&args.out, e))
+        .context("creating the output folder")?;
     let mut outputs = Vec::new();
     if let Some(mut m) = mcap {
         m.final_map(full.map())?;
