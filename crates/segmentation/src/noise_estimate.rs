@@ -57,6 +57,7 @@ pub struct NoiseEstimation {
     pub consistent_scale: f64,
 }
 
+#[cfg(feature = "serde")]
 fn default_consistent_scale() -> f64 {
     NoiseEstimation::standard().consistent_scale
 }
