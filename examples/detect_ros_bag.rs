@@ -8,6 +8,9 @@
 //! Without an argument it reads the shared ROS 1 bag from `$PCALINE_DATA`
 //! (default `../shared/data`).
 
+// An example prints its results.
+#![allow(clippy::print_stdout)]
+
 use pcaline::{Config, LineDetector};
 use pcaline_io::{LogOptions, LogRecord, read_log};
 use std::ops::ControlFlow;

@@ -9,6 +9,9 @@
 //! Without an argument it reads the shared Intel log from `$PCALINE_DATA`
 //! (default `../shared/data`).
 
+// An example prints its results.
+#![allow(clippy::print_stdout)]
+
 use pcaline::{Mapper, MapperConfig};
 use pcaline_io::{LogOptions, LogRecord, read_log};
 use std::ops::ControlFlow;

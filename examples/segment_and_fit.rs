@@ -7,6 +7,9 @@
 //! cargo run --release --example segment_and_fit
 //! ```
 
+// An example prints its results.
+#![allow(clippy::print_stdout)]
+
 use pcaline_fitting::{Moments, fit_pca, is_elongated};
 use pcaline_geometry::{BearingTable, RangeNoise, Scan, ScanPoints};
 use pcaline_segmentation::{BreakRule, level1_clusters, split_at_farthest};

@@ -8,6 +8,9 @@
 //! cargo run --release --example simulate_and_score
 //! ```
 
+// An example prints its results.
+#![allow(clippy::print_stdout)]
+
 use pcaline::{Config, LineDetector};
 use pcaline_eval::{DetectionCriteria, DetectionScore, true_walls};
 use pcaline_sim::Simulator;
@@ -36,8 +39,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut score = DetectionScore::default();
     for frame in sim.frames() {
         let truth = true_walls(&frame, sim.world(), &criteria);
-        let lines: Vec<_> =
-            detector.detect(&frame.scan).lines.iter().map(|l| l.line.clone()).collect();
+        let lines: Vec<_> = detector.detect(&frame.scan).lines.iter().map(|l| l.line).collect();
         score.add_scan(&truth, &lines, &criteria);
     }
     let (alpha_median, alpha_rms) = score.alpha_error();

@@ -123,7 +123,7 @@ pub fn decode_laserscan_ros1(data: &[u8]) -> Result<Scan, String> {
 pub fn encode_laserscan_cdr(scan: &Scan, frame_id: &str) -> Vec<u8> {
     let mut out = vec![0u8, 1, 0, 0];
     let pad = |out: &mut Vec<u8>, n: usize| {
-        while (out.len() - 4) % n != 0 {
+        while !(out.len() - 4).is_multiple_of(n) {
             out.push(0);
         }
     };

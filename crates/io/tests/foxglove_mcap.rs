@@ -198,20 +198,20 @@ fn validate(schema: &Value, v: &Value, at: &str) -> Result<(), String> {
             return Err(format!("{at}: expected {t}, found {v}"));
         }
     }
-    if let Some(min) = schema.get("minimum").and_then(Value::as_f64) {
-        if v.as_f64().is_some_and(|x| x < min) {
-            return Err(format!("{at}: {v} below the minimum {min}"));
-        }
+    if let Some(min) = schema.get("minimum").and_then(Value::as_f64)
+        && v.as_f64().is_some_and(|x| x < min)
+    {
+        return Err(format!("{at}: {v} below the minimum {min}"));
     }
-    if let Some(max) = schema.get("maximum").and_then(Value::as_f64) {
-        if v.as_f64().is_some_and(|x| x > max) {
-            return Err(format!("{at}: {v} above the maximum {max}"));
-        }
+    if let Some(max) = schema.get("maximum").and_then(Value::as_f64)
+        && v.as_f64().is_some_and(|x| x > max)
+    {
+        return Err(format!("{at}: {v} above the maximum {max}"));
     }
-    if let Some(options) = schema.get("oneOf").and_then(Value::as_array) {
-        if !options.iter().any(|o| o.get("const") == Some(v)) {
-            return Err(format!("{at}: {v} is none of the oneOf constants"));
-        }
+    if let Some(options) = schema.get("oneOf").and_then(Value::as_array)
+        && !options.iter().any(|o| o.get("const") == Some(v))
+    {
+        return Err(format!("{at}: {v} is none of the oneOf constants"));
     }
     if let Some(required) = schema.get("required").and_then(Value::as_array) {
         for key in required.iter().filter_map(Value::as_str) {

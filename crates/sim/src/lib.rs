@@ -32,8 +32,8 @@ mod world;
 pub use maze::{MazeConfig, WallStyle, generate_maze};
 pub use odometry::OdometryModel;
 pub use scene::{
-    OdometrySpec, Scene, SceneError, SensorKind, SensorSpec, Shape, StartPose, TiltSpec,
-    TrajectorySpec,
+    MAX_SCENE_COORDINATE_M, MAX_SCENE_SCANS, MAX_SCENE_WALL_LENGTH_M, OdometrySpec, Scene,
+    SceneError, SensorKind, SensorSpec, Shape, StartPose, TiltSpec, TrajectorySpec,
 };
 pub use sensor::{Faults, SensorModel, Tilt};
 pub use simulate::{BeamTruth, Fault, SimFrame, Simulator, WallRun};

@@ -186,11 +186,11 @@ pub struct SceneError {
 
 /// Vertices farther than this from the origin, metres, are refused: no
 /// LIDAR scene needs them, and evaluation bins every wall in 5 cm.
-pub const MAX_COORDINATE_M: f64 = 1e5;
+pub const MAX_SCENE_COORDINATE_M: f64 = 1e5;
 /// The most wall and obstacle length a scene may hold, metres.
-pub const MAX_WALL_LENGTH_M: f64 = 1e6;
+pub const MAX_SCENE_WALL_LENGTH_M: f64 = 1e6;
 /// The most scans a scene's run may take (seven hours at 40 Hz).
-pub const MAX_SCANS: f64 = 1e6;
+pub const MAX_SCENE_SCANS: f64 = 1e6;
 /// A start or waypoint from which more than this fraction of directions
 /// meets no wall lies outside the walls (a door in a room's wall lets
 /// through a few directions, the outside of a room at least a quarter).
@@ -206,8 +206,8 @@ impl Scene {
     /// and odometry values are valid; the trajectory has a positive speed, yaw
     /// rate and scan rate, starts and turns inside the walls (not outside
     /// them, not inside an obstacle) and never passes through a wall or
-    /// obstacle. Work is bounded: vertices within [`MAX_COORDINATE_M`], at
-    /// most [`MAX_WALL_LENGTH_M`] of walls and [`MAX_SCANS`] scans.
+    /// obstacle. Work is bounded: vertices within [`MAX_SCENE_COORDINATE_M`], at
+    /// most [`MAX_SCENE_WALL_LENGTH_M`] of walls and [`MAX_SCENE_SCANS`] scans.
     pub fn validate(&self) -> Result<(), SceneError> {
         for (kind, shapes) in [("walls", &self.walls), ("obstacles", &self.obstacles)] {
             for (i, shape) in shapes.iter().enumerate() {
@@ -223,10 +223,10 @@ impl Scene {
                     if !p[0].is_finite() || !p[1].is_finite() {
                         return Err(err(item, format!("vertex {k} is not finite: {p:?}")));
                     }
-                    if p[0].abs() > MAX_COORDINATE_M || p[1].abs() > MAX_COORDINATE_M {
+                    if p[0].abs() > MAX_SCENE_COORDINATE_M || p[1].abs() > MAX_SCENE_COORDINATE_M {
                         return Err(err(
                             item,
-                            format!("vertex {k} {p:?} lies beyond ±{MAX_COORDINATE_M:e} m"),
+                            format!("vertex {k} {p:?} lies beyond ±{MAX_SCENE_COORDINATE_M:e} m"),
                         ));
                     }
                 }
@@ -242,10 +242,10 @@ impl Scene {
         }
         let walls = self.world_walls();
         let length: f64 = walls.iter().map(|w| (w.b - w.a).norm()).sum();
-        if length > MAX_WALL_LENGTH_M {
+        if length > MAX_SCENE_WALL_LENGTH_M {
             return Err(err(
                 "walls",
-                format!("{length:.0} m of walls, more than {MAX_WALL_LENGTH_M:e} m"),
+                format!("{length:.0} m of walls, more than {MAX_SCENE_WALL_LENGTH_M:e} m"),
             ));
         }
         self.sensor_model().validate().map_err(|e| err("sensor", e.to_string()))?;
@@ -300,11 +300,11 @@ impl Scene {
         let one_lap_s = self.trajectory_of_laps(1).duration_s();
         let lap_s = self.trajectory_of_laps(2).duration_s() - one_lap_s;
         let scans = (one_lap_s + f64::from(t.laps.max(1) - 1) * lap_s) * rate_hz;
-        if scans.is_nan() || scans > MAX_SCANS {
+        if scans.is_nan() || scans > MAX_SCENE_SCANS {
             return Err(err(
                 "trajectory",
                 format!(
-                    "the run would take {scans:.3e} scans, more than {MAX_SCANS:e}: shorten the \
+                    "the run would take {scans:.3e} scans, more than {MAX_SCENE_SCANS:e}: shorten the \
                      path, lower laps or scan_rate_hz, or raise speed_m_s"
                 ),
             ));
