@@ -1,6 +1,7 @@
 //! Architecture invariants (ARCHITECTURE.md), checked from `cargo metadata`
 //! and the sources: the layering of the crates, the dependencies algorithm
-//! crates may not have, no I/O or printing in algorithm crates, and a `//!`
+//! crates may not have, no I/O or printing in algorithm crates, parry2d only
+//! in sim, file-format crates only in io, printing only in cli, and a `//!`
 //! doc opening every source file.
 
 use serde_json::Value;
@@ -105,6 +106,63 @@ fn algorithm_crates_do_no_io_and_print_nothing() {
             ] {
                 assert!(!code.contains(banned), "{} uses {banned}", file.display());
             }
+        }
+    }
+}
+
+/// Third-party crates only one workspace crate may depend on (dev
+/// dependencies aside): ray casting lives in sim, file formats in io.
+const OWNED_BY: &[(&str, &str)] = &[
+    ("parry2d", "pcaline-sim"),
+    ("rosbag", "pcaline-io"),
+    ("rusqlite", "pcaline-io"),
+    ("mcap", "pcaline-io"),
+];
+
+#[test]
+fn only_sim_knows_parry2d_and_only_io_knows_file_formats() {
+    let meta = metadata();
+    let mut owners_seen = 0;
+    for package in meta["packages"].as_array().unwrap() {
+        let name = package["name"].as_str().unwrap();
+        for dep in package["dependencies"].as_array().unwrap() {
+            if dep["kind"].as_str() == Some("dev") {
+                continue;
+            }
+            let dep_name = dep["name"].as_str().unwrap();
+            if let Some((_, owner)) = OWNED_BY.iter().find(|(d, _)| *d == dep_name) {
+                assert_eq!(name, *owner, "{name} depends on {dep_name}, which only {owner} may");
+                owners_seen += 1;
+            }
+        }
+    }
+    assert_eq!(owners_seen, OWNED_BY.len(), "each owned crate is used by its owner");
+}
+
+#[test]
+fn only_cli_prints() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![];
+    rust_files(&root.join("src"), &mut files);
+    for entry in std::fs::read_dir(root.join("crates")).unwrap() {
+        let dir = entry.unwrap().path();
+        if dir.file_name().is_some_and(|n| n != "cli") {
+            rust_files(&dir.join("src"), &mut files);
+        }
+    }
+    assert!(files.len() > 50, "found only {} source files", files.len());
+    for file in files {
+        let text = std::fs::read_to_string(&file).unwrap();
+        // Code outside the tests and the docs (doc examples may print).
+        let code: String = text
+            .split("#[cfg(test)]")
+            .next()
+            .unwrap()
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .collect();
+        for banned in ["println!", "eprintln!", "print!(", "eprint!(", "dbg!("] {
+            assert!(!code.contains(banned), "{} uses {banned}: only cli prints", file.display());
         }
     }
 }

@@ -1,6 +1,8 @@
 //! Every reader fed random bytes and truncated real files: an error or a
 //! result, never a panic. Seeded.
 
+#![allow(clippy::print_stderr)] // the loud report of a missing dataset
+
 use pcaline_io::{LogFormat, LogOptions, read_log, read_relations, read_scene};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use std::ops::ControlFlow;
@@ -71,13 +73,14 @@ fn truncated_real_files_never_panic() {
         "single-scans/laser_scan_1.json",
     ];
     let dir = tmp_dir();
-    let mut checked = 0;
+    let ci = std::env::var("CI").is_ok_and(|v| v == "true");
+    let (mut checked, mut skipped) = (0, 0);
     for rel in files {
         let Ok(bytes) = std::fs::read(root.join(rel)) else {
-            assert!(
-                std::env::var("CI").is_err_and(|_| true) || std::env::var("CI").unwrap() != "true",
-                "missing {rel}"
-            );
+            // Missing data is a failure under CI, and a loud skip elsewhere.
+            assert!(!ci, "missing dataset {} (CI=true)", root.join(rel).display());
+            eprintln!("SKIPPED: {} not found (set PCALINE_DATA)", root.join(rel).display());
+            skipped += 1;
             continue;
         };
         let ext = Path::new(rel).extension().unwrap().to_string_lossy().into_owned();
@@ -102,5 +105,7 @@ fn truncated_real_files_never_panic() {
         std::fs::write(&path, &bytes).unwrap();
         read_all(&path, None);
     }
-    let _ = checked;
+    // Six truncations of every file found, and only the missing skipped.
+    assert_eq!(checked, 6 * (files.len() - skipped));
+    eprintln!("{checked} truncated files read, {skipped} datasets skipped");
 }

@@ -809,6 +809,13 @@ mod tests {
 
     #[test]
     fn no_matches_keeps_the_prediction_and_says_so() {
+        // The first scan meets an empty map: that too is reported.
+        for config in [AidingConfig::full_pose(), AidingConfig::estimator(), AidingConfig::paper()]
+        {
+            let (pose, first) = aiding(config).step(&Pose2::new(1.0, 2.0, 0.3), &room());
+            assert_eq!(first.fallback, Some(Fallback::NoMatches), "{:?}", config.mode);
+            assert_eq!(pose, Pose2::new(1.0, 2.0, 0.3));
+        }
         let mut a = aiding(AidingConfig::full_pose());
         a.step(&Pose2::identity(), &room());
         let far = vec![wall((40.0, -2.0), (40.0, 2.0))];
