@@ -15,7 +15,7 @@ use pcaline_io::{
 };
 use std::io::{BufWriter, Write};
 use std::ops::ControlFlow;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `pcaline detect`.
 #[derive(Debug, clap::Args)]
@@ -54,15 +54,15 @@ enum Sink {
     Stdout(BufWriter<std::io::StdoutLock<'static>>),
 }
 
-impl Sink {
-    /// The error of a failed write, naming the file or stdout.
-    fn error(&self, e: std::io::Error) -> anyhow::Error {
-        match self {
-            Sink::File(f) => pcaline_io::IoError::io(f.target(), e).into(),
-            Sink::Stdout(_) => stdout_error(e),
-        }
+/// The error of a failed write to `output` (`None`: stdout), naming it.
+fn sink_error(output: Option<&Path>, e: std::io::Error) -> anyhow::Error {
+    match output {
+        Some(path) => pcaline_io::IoError::io(path, e).into(),
+        None => stdout_error(e),
     }
+}
 
+impl Sink {
     /// Puts a file in place; stdout is already flushed.
     fn commit(self) -> Result<()> {
         if let Sink::File(f) = self {
@@ -97,7 +97,7 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     let sensor = args.log.sensor(&args.file, config.sensor)?;
     let mut detector = LineDetector::new(config.detector_for(sensor))?;
     let mut mcap = McapOut::create(args.mcap.as_deref())?;
-    let output = args.output.as_deref().filter(|p| *p != std::path::Path::new("-"));
+    let output = args.output.as_deref().filter(|p| *p != Path::new("-"));
     let sink = match output {
         Some(path) => Sink::File(AtomicFile::create(path)?),
         None => Sink::Stdout(BufWriter::new(std::io::stdout().lock())),
@@ -147,7 +147,7 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
             }
         }
         if let Err(e) = out.write(&scan) {
-            failed = Some(e.into());
+            failed = Some(sink_error(output, e));
             return ControlFlow::Break(());
         }
         bar.inc(1);
@@ -155,21 +155,14 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     })?;
     bar.finish_and_clear();
     if let Some(e) = failed {
-        // The file's own writer names it; a failed stdout names stdout.
-        return Err(match e.downcast::<std::io::Error>() {
-            Ok(io) => out_error(&out, io),
-            Err(other) => other,
-        });
+        return Err(e);
     }
     let scans = out.scans();
     if scans == 0 {
         // Nothing is written: the temporary files are dropped.
         return Err(BadInput(format!("{}: no scans", args.file.display())).into());
     }
-    let sink = out.finish().map_err(|e| match output {
-        Some(path) => pcaline_io::IoError::io(path, e).into(),
-        None => stdout_error(e),
-    })?;
+    let sink = out.finish().map_err(|e| sink_error(output, e))?;
     sink.commit()?;
     if let Some(m) = mcap {
         m.finish(quiet)?;
@@ -178,8 +171,4 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
         eprintln!("{}: {} scans, {} lines", args.file.display(), scans, lines_total);
     }
     Ok(())
-}
-
-fn out_error(out: &LinesWriter<Sink>, e: std::io::Error) -> anyhow::Error {
-    out.get_ref().error(e)
 }

@@ -5,7 +5,7 @@ use crate::exit::BadInput;
 use crate::log_args::LogArgs;
 use crate::mcap_out::McapOut;
 use crate::out::outln;
-use crate::picture::svg_to_png;
+use crate::picture::add_svg_and_png;
 use crate::progress;
 use crate::svg::{Mark, Plot};
 use anyhow::{Context, Result};
@@ -197,10 +197,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         outputs.add(&path, &json_bytes(&path, g)?)?;
     }
     let svg = draw(aiding.map(), &poses, graph.as_ref(), &args.log.display().to_string());
-    outputs.add(&args.out.join("map.svg"), svg.as_bytes())?;
-    if args.png {
-        outputs.add(&args.out.join("map.png"), &svg_to_png(&svg)?)?;
-    }
+    add_svg_and_png(&mut outputs, &args.out, "map", &svg, args.png)?;
     let written = outputs.commit()?;
     let mcap_path = mcap.map(|m| m.finish(quiet)).transpose()?;
     if !quiet {

@@ -3,9 +3,9 @@
 
 use crate::exit::BadInput;
 use anyhow::{Context, Result};
-use pcaline_io::write_atomic;
+use pcaline_io::{OutputSet, write_atomic};
 use resvg::{tiny_skia, usvg};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Renders an SVG document to PNG bytes. Text needs a system font; without
 /// one the picture is drawn without its labels, and a warning says so.
@@ -74,17 +74,19 @@ pub fn write_picture(path: &Path, svg: &str) -> Result<()> {
     Ok(())
 }
 
-/// Writes `name.svg` in `dir`, and `name.png` too when `png`; returns the paths written.
-pub fn write_svg_and_png(dir: &Path, name: &str, svg: &str, png: bool) -> Result<Vec<PathBuf>> {
-    let svg_path = dir.join(format!("{name}.svg"));
-    write_atomic(&svg_path, svg.as_bytes())?;
-    let mut written = vec![svg_path];
+/// Adds `name.svg` in `dir` to `outputs`, and `name.png` too when `png`.
+pub fn add_svg_and_png(
+    outputs: &mut OutputSet,
+    dir: &Path,
+    name: &str,
+    svg: &str,
+    png: bool,
+) -> Result<()> {
+    outputs.add(&dir.join(format!("{name}.svg")), svg.as_bytes())?;
     if png {
-        let png_path = dir.join(format!("{name}.png"));
-        write_atomic(&png_path, &svg_to_png(svg)?)?;
-        written.push(png_path);
+        outputs.add(&dir.join(format!("{name}.png")), &svg_to_png(svg)?)?;
     }
-    Ok(written)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@
 use crate::exit::BadInput;
 use crate::mcap_out::McapOut;
 use crate::out::outln;
-use crate::picture::write_svg_and_png;
+use crate::picture::add_svg_and_png;
 use crate::progress;
 use crate::scene_cmd::draw_scene;
 use crate::svg::{Mark, Plot};
@@ -16,7 +16,8 @@ use pcaline::aiding::{Aiding, AidingConfig, AidingMode, SensorLine};
 use pcaline::{LineDetector, LineSegment, Pose2};
 use pcaline_eval::{AidedRun, AidedScore, ObservedRunError, RunStep};
 use pcaline_io::{
-    LineRecord, PoseKind, parse_scene, read_scene, write_json, write_map_csv, write_map_json,
+    LineRecord, OutputSet, PoseKind, json_bytes, map_csv_text, map_json_bytes, parse_scene,
+    read_scene,
 };
 use pcaline_sim::{Scene, Simulator};
 use serde::Serialize;
@@ -238,18 +239,13 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .map_err(|e| pcaline_io::IoError::io(&args.out, e))
         .context("creating the output folder")?;
-    let mut outputs = Vec::new();
-    if let Some(mut m) = mcap {
-        m.final_map(full.map())?;
-        outputs.push(m.finish(true)?.display().to_string());
-    }
-    let scans_path = args.out.join("scans.json");
-    write_json(&scans_path, &records)?;
-    outputs.push(scans_path.display().to_string());
-    let (map_json, map_csv) = (args.out.join("map.json"), args.out.join("map.csv"));
-    write_map_json(&map_json, full.map())?;
-    write_map_csv(&map_csv, full.map())?;
-    outputs.extend([map_json.display().to_string(), map_csv.display().to_string()]);
+    // Written as a set, as `map` writes its files: all or none.
+    let mut set = OutputSet::new();
+    let path = args.out.join("scans.json");
+    set.add(&path, &json_bytes(&path, &records)?)?;
+    let path = args.out.join("map.json");
+    set.add(&path, &map_json_bytes(&path, full.map())?)?;
+    set.add(&args.out.join("map.csv"), map_csv_text(full.map()).as_bytes())?;
     let pictures = [
         ("detections", draw_detections(&scene, &sim, &drawn)),
         ("map", draw_map(&scene, &sim, full, estimates)),
@@ -257,9 +253,12 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         ("heading-error", draw_heading_error(&sim, estimates)),
     ];
     for (name, svg) in &pictures {
-        for p in write_svg_and_png(&args.out, name, svg, args.png)? {
-            outputs.push(p.display().to_string());
-        }
+        add_svg_and_png(&mut set, &args.out, name, svg, args.png)?;
+    }
+    let mut outputs: Vec<String> = set.commit()?.iter().map(|p| p.display().to_string()).collect();
+    if let Some(mut m) = mcap {
+        m.final_map(full.map())?;
+        outputs.push(m.finish(true)?.display().to_string());
     }
 
     residuals.sort_by(f64::total_cmp);

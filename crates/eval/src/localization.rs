@@ -36,9 +36,8 @@ pub struct RunStep<'a> {
     pub frame: &'a SimFrame,
     /// Its lines, in the sensor frame.
     pub lines: &'a [SensorLine],
-    /// Each loop's pose after the frame, in the order of the modes.
-    pub poses: &'a [Pose2],
-    /// The loops, their maps as they are after the frame.
+    /// The loops, in the order of the modes: their poses and maps as they
+    /// are after the frame.
     pub loops: &'a [Aiding],
     /// The loop with loop closure, when there is one (its pose and map are
     /// the online ones, before the run's last optimization).
@@ -135,11 +134,9 @@ impl AidedRun {
             if let Some(l) = loop_closing.as_mut() {
                 l.step_at(frame.time_s, &frame.odometry_pose, &lines);
             }
-            let poses: Vec<Pose2> = estimates.iter().filter_map(|e| e.last().copied()).collect();
             observe(RunStep {
                 frame: &frame,
                 lines: &lines,
-                poses: &poses,
                 loops: &loops,
                 loop_closing: loop_closing.as_ref(),
             })

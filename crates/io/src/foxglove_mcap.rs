@@ -253,23 +253,24 @@ impl FoxgloveMcapWriter {
             .into_iter()
             .enumerate()
             .filter(|(_, l)| finite_segment(l))
-            .map(|(k, l)| Entity {
-                timestamp: stamp.time(),
-                frame_id: FRAME_SENSOR,
-                id: format!("line-{k}"),
-                lifetime: Time::ZERO,
-                frame_locked: true,
-                metadata: vec![
+            .map(|(k, l)| {
+                let ends = [[l.start.x, l.start.y], [l.end.x, l.end.y]];
+                let mut e = Entity::lines(
+                    stamp,
+                    FRAME_SENSOR,
+                    format!("line-{k}"),
+                    &ends,
+                    0.04,
+                    LINE_COLOUR,
+                );
+                // Drawn with the sensor as it moves, until the next scan's lines.
+                e.frame_locked = true;
+                e.metadata = vec![
                     KeyValue::new("id", k.to_string()),
                     KeyValue::new("n_points", l.n_points.to_string()),
                     KeyValue::new("residual_std_m", format!("{:.4}", l.residual_std)),
-                ],
-                lines: vec![LinePrimitive::list(
-                    &[[l.start.x, l.start.y], [l.end.x, l.end.y]],
-                    0.04,
-                    LINE_COLOUR,
-                )],
-                ..Entity::default()
+                ];
+                e
             })
             .collect();
         self.write_scene(Topic::Lines, stamp, entities)
@@ -288,19 +289,13 @@ impl FoxgloveMcapWriter {
                 .filter(|m| m.status == status && finite_segment(&m.line))
                 .flat_map(|m| [[m.line.start.x, m.line.start.y], [m.line.end.x, m.line.end.y]])
                 .collect();
-            entities.push(Entity {
-                timestamp: stamp.time(),
-                frame_id: FRAME_WORLD,
-                id: format!("map-{name}"),
-                lifetime: Time::ZERO,
-                frame_locked: false,
-                metadata: vec![
-                    KeyValue::new("status", name.to_string()),
-                    KeyValue::new("lines", (ends.len() / 2).to_string()),
-                ],
-                lines: vec![LinePrimitive::list(&ends, 0.05, colour)],
-                ..Entity::default()
-            });
+            let mut e =
+                Entity::lines(stamp, FRAME_WORLD, format!("map-{name}"), &ends, 0.05, colour);
+            e.metadata = vec![
+                KeyValue::new("status", name.to_string()),
+                KeyValue::new("lines", (ends.len() / 2).to_string()),
+            ];
+            entities.push(e);
         }
         self.write_scene(Topic::Map, stamp, entities)
     }
@@ -313,16 +308,9 @@ impl FoxgloveMcapWriter {
             .filter(|w| w.iter().flatten().all(|v| v.is_finite()))
             .flat_map(|w| [w[0], w[1]])
             .collect();
-        let entity = Entity {
-            timestamp: stamp.time(),
-            frame_id: FRAME_WORLD,
-            id: "walls".into(),
-            lifetime: Time::ZERO,
-            frame_locked: false,
-            metadata: vec![KeyValue::new("walls", (ends.len() / 2).to_string())],
-            lines: vec![LinePrimitive::list(&ends, 0.08, WALL_COLOUR)],
-            ..Entity::default()
-        };
+        let mut entity =
+            Entity::lines(stamp, FRAME_WORLD, "walls".into(), &ends, 0.08, WALL_COLOUR);
+        entity.metadata = vec![KeyValue::new("walls", (ends.len() / 2).to_string())];
         self.write_scene(Topic::TrueWalls, stamp, vec![entity])
     }
 
@@ -564,6 +552,30 @@ struct Entity {
     triangles: [(); 0],
     texts: [(); 0],
     models: [(); 0],
+}
+
+impl Entity {
+    /// An entity of one line list (segments from pairs of `ends`) in
+    /// `frame`, kept until replaced or deleted, placed in the fixed frame;
+    /// no metadata.
+    fn lines(
+        stamp: Stamp,
+        frame: &'static str,
+        id: String,
+        ends: &[[f64; 2]],
+        thickness_m: f64,
+        color: Color,
+    ) -> Self {
+        Entity {
+            timestamp: stamp.time(),
+            frame_id: frame,
+            id,
+            lifetime: Time::ZERO,
+            frame_locked: false,
+            lines: vec![LinePrimitive::list(ends, thickness_m, color)],
+            ..Entity::default()
+        }
+    }
 }
 
 #[derive(Debug, Serialize)]
