@@ -1,7 +1,7 @@
 //! [`Mapper`]: the whole loop of the paper's section 2.1: scan and source pose
 //! in, corrected pose and updated line map out.
 
-use crate::{Config, LineDetector};
+use crate::{Config, DetectedLine, LineDetector};
 use pcaline_aiding::{
     AidingConfig, Localizer, LoopClosing, LoopClosureConfig, OptimizeReport, SensorLine, StepReport,
 };
@@ -70,12 +70,15 @@ pub struct MapperStep {
 /// let scan = Scan::new(angle_min, inc, 0.1, 30.0, ranges);
 /// let step = mapper.process(&scan, &Pose2::identity());
 /// assert_eq!(step.lines, 1);
+/// assert_eq!(mapper.lines()[0].line.n_points, 241);
 /// assert_eq!(mapper.map().len(), 1);
 /// ```
 #[derive(Debug, Clone)]
 pub struct Mapper {
     detector: LineDetector,
     localizer: Localizer,
+    /// The last scan's lines, as detected and as the localizer takes them.
+    detected: Vec<DetectedLine>,
     lines: Vec<SensorLine>,
     /// The last stamped source pose (for the deskew velocity).
     last_source: Option<(f64, Pose2)>,
@@ -87,6 +90,7 @@ impl Mapper {
         Ok(Mapper {
             detector: LineDetector::new(config.detector)?,
             localizer: Localizer::new(config.aiding, config.map, config.loop_closure)?,
+            detected: Vec::new(),
             lines: Vec::new(),
             last_source: None,
         })
@@ -119,9 +123,17 @@ impl Mapper {
     /// Detects the scan's lines, deskewed with `velocity` when the scan
     /// carries its beam timing.
     fn detect(&mut self, scan: &Scan, velocity: Option<Pose2>) {
-        self.lines.clear();
         let detection = self.detector.detect_moving(scan, velocity.as_ref());
+        self.detected.clear();
+        self.detected.extend_from_slice(detection.lines);
+        self.lines.clear();
         self.lines.extend(detection.lines.iter().map(SensorLine::from));
+    }
+
+    /// The lines detected in the last processed scan, sensor frame (empty
+    /// before the first scan).
+    pub fn lines(&self) -> &[DetectedLine] {
+        &self.detected
     }
 
     /// The map built so far (rebuilt from the keyframes after each loop

@@ -187,7 +187,7 @@ pub fn parse(path: &Path, text: &str, sigma_m: f64) -> Result<NamedConfig> {
     let detector = sensor.map_or(detector, |s| detector.with_noise(s.range_noise()));
     let aiding = AidingConfig::estimator();
     let loop_closure = LoopClosureConfig::standard();
-    let mut merged = Value::try_from(ConfigFile {
+    let merged = Value::try_from(ConfigFile {
         preset: base_name.into(),
         sensor,
         detector,
@@ -195,15 +195,7 @@ pub fn parse(path: &Path, text: &str, sigma_m: f64) -> Result<NamedConfig> {
         aiding,
         loop_closure,
     })?;
-    merge(&mut merged, &overrides, "").map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
-    let file: ConfigFile =
-        merged.try_into().map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
-    file.detector
-        .validate()
-        .and_then(|()| file.map.validate())
-        .and_then(|()| file.aiding.validate())
-        .and_then(|()| file.loop_closure.validate())
-        .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+    let file = merged_file(merged, &overrides, &path.display().to_string())?;
     Ok(NamedConfig {
         name: path.display().to_string(),
         preset: base_name.to_string(),
@@ -212,6 +204,39 @@ pub fn parse(path: &Path, text: &str, sigma_m: f64) -> Result<NamedConfig> {
         aiding: file.aiding,
         loop_closure: file.loop_closure,
         sensor: file.sensor,
+    })
+}
+
+/// Resolves `spec` as [`resolve`] does, then writes `overrides` over it:
+/// a table in the file's form (`{detector: {fitting: {eth: 30}}}`), merged
+/// and checked as a file's own fields are. `label` names the overrides in
+/// errors (the Python keyword arguments, say), which also name the field
+/// path (`unknown key `detector.fitting.eht``).
+pub fn resolve_with_overrides(
+    spec: &str,
+    sigma_m: f64,
+    overrides: &Value,
+    label: &str,
+) -> Result<NamedConfig> {
+    let base = resolve(spec, sigma_m)?;
+    if overrides.as_table().is_none_or(|t| t.is_empty()) {
+        return Ok(base);
+    }
+    let merged = Value::try_from(ConfigFile {
+        preset: base.preset.clone(),
+        sensor: base.sensor,
+        detector: base.detector,
+        map: base.map,
+        aiding: base.aiding,
+        loop_closure: base.loop_closure,
+    })?;
+    let file = merged_file(merged, overrides, label)?;
+    Ok(NamedConfig {
+        detector: file.detector,
+        map: file.map,
+        aiding: file.aiding,
+        loop_closure: file.loop_closure,
+        ..base
     })
 }
 
@@ -234,6 +259,20 @@ pub fn show(name: &str) -> Result<String> {
         aiding,
         loop_closure,
     })?)
+}
+
+/// `base` (a file's form) with `overrides` written over it, read back and
+/// validated; errors start with `label`.
+fn merged_file(mut base: Value, overrides: &Value, label: &str) -> Result<ConfigFile> {
+    merge(&mut base, overrides, "").map_err(|e| BadInput(format!("{label}: {e}")))?;
+    let file: ConfigFile = base.try_into().map_err(|e| BadInput(format!("{label}: {e}")))?;
+    file.detector
+        .validate()
+        .and_then(|()| file.map.validate())
+        .and_then(|()| file.aiding.validate())
+        .and_then(|()| file.loop_closure.validate())
+        .map_err(|e| BadInput(format!("{label}: {e}")))?;
+    Ok(file)
 }
 
 /// Writes `overrides` into `base`: objects key by key, anything else whole.

@@ -36,6 +36,46 @@ pub struct LogOptions {
 }
 
 impl LogFormat {
+    /// Every format, in the order of [`LogFormat::names`].
+    pub const ALL: [LogFormat; 6] = [
+        LogFormat::Carmen,
+        LogFormat::Ros1Bag,
+        LogFormat::Ros2Bag,
+        LogFormat::Mcap,
+        LogFormat::Json,
+        LogFormat::Csv,
+    ];
+
+    /// The short name the command line's `--format` takes: `carmen`,
+    /// `ros1`, `ros2`, `mcap`, `json` or `csv`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            LogFormat::Carmen => "carmen",
+            LogFormat::Ros1Bag => "ros1",
+            LogFormat::Ros2Bag => "ros2",
+            LogFormat::Mcap => "mcap",
+            LogFormat::Json => "json",
+            LogFormat::Csv => "csv",
+        }
+    }
+
+    /// The format named `name` (as [`LogFormat::name`] writes it,
+    /// case-insensitive), or `None`.
+    ///
+    /// ```
+    /// use pcaline_io::LogFormat;
+    /// assert_eq!(LogFormat::from_name("ROS2"), Some(LogFormat::Ros2Bag));
+    /// assert_eq!(LogFormat::from_name("bag"), None);
+    /// ```
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.name().eq_ignore_ascii_case(name))
+    }
+
+    /// The names, comma-separated, for messages.
+    pub fn names() -> String {
+        Self::ALL.map(LogFormat::name).join(", ")
+    }
+
     /// Detects the format from the extension, a bag directory, or the first
     /// bytes (magic numbers).
     pub fn detect(path: &Path) -> Result<LogFormat, IoError> {
