@@ -69,7 +69,7 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 fn every_source_file_opens_with_a_module_doc() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = vec![];
-    for dir in ["src", "crates", "tests", "benches"] {
+    for dir in ["src", "crates", "tests", "benches", "python/src"] {
         if root.join(dir).exists() {
             rust_files(&root.join(dir), &mut files);
         }
@@ -144,6 +144,8 @@ fn only_cli_prints() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = vec![];
     rust_files(&root.join("src"), &mut files);
+    // The Python bindings report through exceptions, never stdout.
+    rust_files(&root.join("python/src"), &mut files);
     for entry in std::fs::read_dir(root.join("crates")).unwrap() {
         let dir = entry.unwrap().path();
         if dir.file_name().is_some_and(|n| n != "cli") {

@@ -32,11 +32,12 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=15)
     parser.add_argument("--calls", type=int, default=2000)
     parser.add_argument("--config", default="default")
+    parser.add_argument("--dtype", default="float32", choices=["float32", "float64"])
     args = parser.parse_args()
 
     simulator = sim.Simulator(sim.load_scene(ROOT / "sim-scenes" / "office-clutter.toml"), seed=1)
     scan = simulator[len(simulator) // 3].scan
-    ranges = np.ascontiguousarray(scan.ranges, dtype=np.float32)
+    ranges = np.ascontiguousarray(scan.ranges, dtype=args.dtype)
     header = (scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max)
     detector = pcaline.LineDetector(args.config)
     lines = len(detector.detect(ranges, *header).lines)
@@ -49,7 +50,7 @@ def main() -> None:
         python_us.append((time.perf_counter() - start) / args.calls * 1e6)
         rust_us.append(detector._seconds_per_detection(scan, args.calls) * 1e6)
     ratios = [p / r for p, r in zip(python_us, rust_us)]
-    print(f"scan: {len(ranges)} beams (float32), {lines} lines, config {args.config!r}")
+    print(f"scan: {len(ranges)} beams ({args.dtype}), {lines} lines, config {args.config!r}")
     print(f"python detect(): {statistics.median(python_us):8.2f} us per call (median of {args.rounds} rounds)")
     print(f"rust detect():   {statistics.median(rust_us):8.2f} us per call")
     print(f"ratio python/rust: {statistics.median(ratios):.3f} (rounds: {min(ratios):.3f}-{max(ratios):.3f})")

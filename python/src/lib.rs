@@ -5,7 +5,7 @@
 //! `pcaline.Mapper`, `pcaline.sim`, `pcaline.eval`.
 //!
 //! No Rust panic reaches Python: every argument is checked at the boundary
-//! ([`convert`]) and the algorithm crates do not panic on data.
+//! (`convert.rs`) and the algorithm crates do not panic on data.
 
 mod config;
 mod convert;

@@ -344,6 +344,34 @@ mod tests {
     }
 
     #[test]
+    fn overrides_in_code_are_a_files_overrides() {
+        let table = |text: &str| toml::from_str::<Value>(text).unwrap();
+        let file = write("eth30.toml", "preset = \"paper\"\n[detector.fitting]\neth = 30\n");
+        let by_file = resolve(file.to_str().unwrap(), 0.01).unwrap();
+        let by_code = resolve_with_overrides(
+            "paper",
+            0.01,
+            &table("[detector.fitting]\neth = 30\n"),
+            "overrides",
+        )
+        .unwrap();
+        assert_eq!(by_code.detector, by_file.detector);
+        assert_ne!(by_code.detector, resolve("paper", 0.01).unwrap().detector);
+        // No overrides: the preset itself; a bad one names its path.
+        let none = resolve_with_overrides("adaptive", 0.01, &table(""), "x").unwrap();
+        assert_eq!(none, resolve("adaptive", 0.01).unwrap());
+        let e = resolve_with_overrides("default", 0.01, &table("[map]\nmax_ofset_m = 1\n"), "kw")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("kw: ") && e.contains("map.max_ofset_m"), "{e}");
+        let e =
+            resolve_with_overrides("default", 0.01, &table("[detector.fitting]\neth = -1\n"), "kw")
+                .unwrap_err()
+                .to_string();
+        assert!(e.contains("eth"), "{e}");
+    }
+
+    #[test]
     fn every_preset_round_trips_through_its_file_form() {
         for name in PRESETS {
             let text = show(name).unwrap();
