@@ -2,63 +2,13 @@
 //! scan, with reusable buffers and the intermediate results exposed.
 
 use crate::Config;
-use pcaline_fitting::{
-    Moments, Piece, Straightness, is_elongated, line_from_eigen, merge_adjacent, refine_boundaries,
-    straightness,
-};
-use pcaline_geometry::{
-    BearingTable, ConfigError, LineSegment, Pose2, RangeNoise, Scan, ScanPoints,
-};
+use pcaline_fitting::{DetectedLine, LineFits, fit_lines};
+use pcaline_geometry::{BearingTable, ConfigError, Pose2, RangeNoise, Scan, ScanPoints};
 use pcaline_segmentation::{
-    Level2Rule, NoiseEstimate, NoiseScratch, RangeGrid, derivative_peak_split, detect_range_step,
-    estimate_range_noise, level1_clusters, seam_start, split_at_farthest,
+    NoiseEstimate, NoiseScratch, RangeGrid, Segments, detect_range_step, estimate_range_noise,
+    segment,
 };
 use std::ops::Range;
-
-/// A detected line and the points it was fitted from.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DetectedLine {
-    /// The line in the sensor frame.
-    pub line: LineSegment,
-    /// Moments of the fitted points, sensor frame (for maps that refine lines).
-    pub moments: Moments,
-    /// Index of the first point (in [`Detection::points`]).
-    pub first_point: usize,
-    /// Index of the last point, inclusive. Smaller than `first_point` only for
-    /// a line that wraps around the end of a closed 360° scan.
-    pub last_point: usize,
-    /// Beam index of the first point.
-    pub first_beam: u32,
-    /// Beam index of the last point.
-    pub last_beam: u32,
-    /// How straight the points under the line are: residual against the
-    /// noise the thresholds used (the UTM-30LX-EW datasheet for the paper's
-    /// detector, which uses none) and the runs test of the residual signs.
-    pub straightness: Straightness,
-}
-
-impl From<&DetectedLine> for pcaline_aiding::SensorLine {
-    /// The line and its moments, as the aiding takes them.
-    fn from(l: &DetectedLine) -> Self {
-        pcaline_aiding::SensorLine { line: l.line, moments: l.moments }
-    }
-}
-
-impl DetectedLine {
-    /// Indices of the line's points in [`Detection::points`], in scan order
-    /// (wrapping for a line across the seam of a closed scan). Includes points
-    /// of rejected pieces lying between merged pieces.
-    pub fn point_indices(&self, n_points: usize) -> impl Iterator<Item = usize> + use<> {
-        wrapping_range(self.first_point, self.last_point, n_points)
-    }
-}
-
-/// The indices `first..=last` of a ring of `n_points`, wrapping past the end
-/// when `last < first`.
-fn wrapping_range(first: usize, last: usize, n_points: usize) -> impl Iterator<Item = usize> {
-    let len = if last >= first { last - first + 1 } else { n_points - first + last + 1 };
-    (0..len).map(move |k| (first + k) % n_points.max(1))
-}
 
 /// The result of [`LineDetector::detect`], borrowing the detector's buffers.
 #[derive(Debug, Clone, Copy)]
@@ -104,13 +54,8 @@ pub struct LineDetector {
     config: Config,
     table: BearingTable,
     points: ScanPoints,
-    level1_breaks: Vec<usize>,
-    clusters: Vec<Range<usize>>,
-    sub_clusters: Vec<Range<usize>>,
-    pieces: Vec<Piece>,
-    lines: Vec<DetectedLine>,
-    derivative_scratch: Vec<[f64; 2]>,
-    split_stack: Vec<Range<usize>>,
+    segments: Segments,
+    fits: LineFits,
     noise_estimate: Option<NoiseEstimate>,
     noise_scratch: NoiseScratch,
 }
@@ -123,13 +68,8 @@ impl LineDetector {
             config,
             table: BearingTable::default(),
             points: ScanPoints::default(),
-            level1_breaks: Vec::new(),
-            clusters: Vec::new(),
-            sub_clusters: Vec::new(),
-            pieces: Vec::new(),
-            lines: Vec::new(),
-            derivative_scratch: Vec::new(),
-            split_stack: Vec::new(),
+            segments: Segments::default(),
+            fits: LineFits::default(),
             noise_estimate: None,
             noise_scratch: NoiseScratch::default(),
         })
@@ -176,129 +116,24 @@ impl LineDetector {
             self.noise_estimate = Some(found);
         }
         let noise = config.nominal_noise();
-        let seg = config.segmentation;
-        let fit = config.fitting;
-
-        // A closed scan is a ring: start reading it at a break-point so no
-        // cluster crosses the seam; with no break at all, the merge bridges it.
-        let mut ring_without_break = false;
-        if scan.is_closed() {
-            match seam_start(&self.points, &seg.level1) {
-                Some(start) => {
-                    let turn = std::f64::consts::TAU * f64::from(scan.angle_increment).signum();
-                    self.points.rotate_start(start, turn);
-                }
-                None => ring_without_break = self.points.len() >= seg.min_cluster_points,
-            }
-        }
-
-        level1_clusters(
+        segment(scan, &mut self.points, &config.segmentation, &mut self.segments);
+        let s = &mut self.segments;
+        fit_lines(
             &self.points,
-            &seg.level1,
-            seg.min_cluster_points,
-            &mut self.level1_breaks,
-            &mut self.clusters,
+            &s.clusters,
+            &mut s.sub_clusters,
+            s.ring_without_break,
+            &config.fitting,
+            noise.as_ref(),
+            &mut self.fits,
         );
 
-        self.sub_clusters.clear();
-        for cluster in &self.clusters {
-            let first_sub = self.sub_clusters.len();
-            match seg.level2 {
-                Level2Rule::DerivativePeaks { sign } => derivative_peak_split(
-                    &self.points,
-                    cluster.clone(),
-                    sign,
-                    &mut self.derivative_scratch,
-                    &mut self.sub_clusters,
-                ),
-                Level2Rule::SplitAtFarthest { sigma_factor, min_distance_m, noise } => {
-                    split_at_farthest(
-                        &self.points,
-                        cluster.clone(),
-                        &noise,
-                        sigma_factor,
-                        min_distance_m,
-                        &mut self.split_stack,
-                        &mut self.sub_clusters,
-                    )
-                }
-                Level2Rule::None => self.sub_clusters.push(cluster.clone()),
-            }
-            refine_boundaries(
-                &self.points.xy,
-                &mut self.sub_clusters[first_sub..],
-                fit.corner_window,
-            );
-        }
-
-        self.pieces.clear();
-        let mut cluster_id = 0;
-        for sub in &self.sub_clusters {
-            while self.clusters[cluster_id].end < sub.end {
-                cluster_id += 1;
-            }
-            if sub.len() < fit.min_points {
-                continue;
-            }
-            let moments = Moments::from_points(&self.points.xy[sub.clone()]);
-            let eigen = moments.eigen();
-            if is_elongated(&eigen, fit.eth)
-                && fit.residual_test.is_none_or(|t| t.accepts(&moments, &eigen))
-            {
-                self.pieces.push(Piece {
-                    moments,
-                    first: sub.start,
-                    last: sub.end - 1,
-                    cluster: cluster_id,
-                });
-            }
-        }
-
-        merge_adjacent(&mut self.pieces, &fit.merge, ring_without_break);
-
-        self.lines.clear();
-        let reference_noise = noise.unwrap_or(RangeNoise::utm30lx());
-        for piece in &self.pieces {
-            let first = self.points.xy[piece.first];
-            let last = self.points.xy[piece.last];
-            // One eigen decomposition serves the fit and the orientation test.
-            let eigen = piece.moments.eigen();
-            if let Some(line) = line_from_eigen(&piece.moments, &eigen, &first, &last)
-                && line.n_points >= fit.min_line_points
-                && line.length() >= fit.min_line_length_m
-                && fit.orientation_test.is_none_or(|t| t.accepts(&piece.moments, &eigen))
-            {
-                // The line's points in scan order, wrapping past the end of a
-                // closed scan.
-                let xy = &self.points.xy;
-                let straightness = if piece.last >= piece.first {
-                    straightness(&xy[piece.first..=piece.last], &line, &reference_noise)
-                } else {
-                    let wrapped = xy[piece.first..].iter().chain(&xy[..=piece.last]);
-                    straightness(wrapped, &line, &reference_noise)
-                };
-                let sigma = reference_noise.sigma_at(line.centroid.coords.norm());
-                if fit.straightness_test.is_some_and(|t| !t.accepts(&straightness, sigma)) {
-                    continue;
-                }
-                self.lines.push(DetectedLine {
-                    line,
-                    moments: piece.moments,
-                    first_point: piece.first,
-                    last_point: piece.last,
-                    first_beam: self.points.beam[piece.first],
-                    last_beam: self.points.beam[piece.last],
-                    straightness,
-                });
-            }
-        }
-
         Detection {
-            lines: &self.lines,
+            lines: &self.fits.lines,
             points: &self.points,
-            level1_breaks: &self.level1_breaks,
-            clusters: &self.clusters,
-            sub_clusters: &self.sub_clusters,
+            level1_breaks: &self.segments.level1_breaks,
+            clusters: &self.segments.clusters,
+            sub_clusters: &self.segments.sub_clusters,
             noise,
             noise_estimate: self.noise_estimate,
         }

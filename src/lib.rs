@@ -30,8 +30,9 @@ mod detector;
 mod mapper;
 
 pub use config::Config;
-pub use detector::{DetectedLine, Detection, LineDetector};
+pub use detector::{Detection, LineDetector};
 pub use mapper::{Mapper, MapperConfig, MapperStep};
+pub use pcaline_fitting::DetectedLine;
 
 pub use pcaline_aiding as aiding;
 pub use pcaline_fitting as fitting;

@@ -25,6 +25,13 @@ pub struct SensorLine {
     pub moments: Moments,
 }
 
+impl From<&pcaline_fitting::DetectedLine> for SensorLine {
+    /// The line and its moments, as the aiding takes them.
+    fn from(l: &pcaline_fitting::DetectedLine) -> Self {
+        SensorLine { line: l.line, moments: l.moments }
+    }
+}
+
 /// What became of one line of a scan in the estimator's step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]

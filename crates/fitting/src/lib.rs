@@ -2,8 +2,12 @@
 //! eigenvalue-ratio elongation test, the merge of adjacent collinear pieces
 //! (eq. 7), and the least-squares baseline (section 3, eq. 16).
 //!
+//! The entry point is [`fit_lines`] over a [`FitConfig`]: sub-clusters of a
+//! segmented scan in, [`DetectedLine`]s out, into reusable [`LineFits`].
 //! Everything is pure and allocation-free except [`merge_adjacent`], which
-//! edits the caller's vector in place.
+//! edits the caller's vector in place, and the buffers of [`LineFits`],
+//! which grow to the largest scan. The geometry ([`ScanPoints`],
+//! [`LineSegment`]) is re-exported, so this crate is usable alone.
 //!
 //! ```
 //! use pcaline_fitting::{FitConfig, Moments, elongation_ratio, line_from_moments};
@@ -20,6 +24,7 @@
 mod corners;
 mod eigen;
 mod elongation;
+mod fit_lines;
 mod least_squares;
 mod merge;
 mod moments;
@@ -32,16 +37,18 @@ mod straightness;
 pub use corners::refine_boundaries;
 pub use eigen::SymmetricEigen2;
 pub use elongation::{elongation_ratio, is_elongated};
+pub use fit_lines::{DetectedLine, LineFits, fit_lines};
 pub use least_squares::{fit_least_squares, slope_intercept_from_moments, vertical_rms_error};
 pub use merge::{MergeRule, Piece, merge_adjacent};
 pub use moments::Moments;
 pub use orientation::OrientationTest;
 pub use pca::{fit_pca, fit_pca_slope_intercept, line_from_eigen, line_from_moments};
+pub use pcaline_geometry::{self as geometry, LineSegment, Point2, RangeNoise, ScanPoints};
 pub use range_bearing::{fit_weighted, pca_covariance, point_covariance};
 pub use residual::ResidualTest;
 pub use straightness::{Straightness, StraightnessTest, straightness};
 
-use pcaline_geometry::{ConfigError, RangeNoise};
+use pcaline_geometry::ConfigError;
 
 /// Configuration of the fitting stage.
 #[derive(Debug, Clone, Copy, PartialEq)]

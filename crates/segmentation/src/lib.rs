@@ -9,6 +9,10 @@
 //!   ([`split_at_farthest`]), which is also the split-and-merge baseline.
 //! - Closed 360° scans: [`seam_start`] finds where to start reading the ring so
 //!   that no wall is cut at the ±180° seam.
+//! - All of it in one call: [`segment`] over a [`SegmentationConfig`], into
+//!   reusable [`Segments`]. The geometry it works on ([`Scan`],
+//!   [`ScanPoints`], [`BearingTable`]) is re-exported, so this crate is
+//!   usable alone.
 //!
 //! ```
 //! use pcaline_geometry::{BearingTable, Scan, ScanPoints};
@@ -28,6 +32,7 @@
 mod level1;
 mod level2;
 mod noise_estimate;
+mod segment;
 mod split;
 
 pub use level1::{continues_line, is_break, level1_clusters, seam_start};
@@ -36,9 +41,11 @@ pub use noise_estimate::{
     NoiseEstimate, NoiseEstimation, NoiseScratch, RangeGrid, detect_range_step,
     estimate_range_noise,
 };
+pub use pcaline_geometry::{self as geometry, BearingTable, RangeNoise, Scan, ScanPoints};
+pub use segment::{Segments, segment};
 pub use split::split_at_farthest;
 
-use pcaline_geometry::{ConfigError, RangeNoise};
+use pcaline_geometry::ConfigError;
 
 /// The level-1 break-point threshold between consecutive points.
 #[derive(Debug, Clone, Copy, PartialEq)]
