@@ -8,8 +8,11 @@ use pcaline_aiding::{
 use pcaline_geometry::{ConfigError, Pose2, Scan};
 use pcaline_mapping::{LineMap, MapConfig};
 
-/// Configuration of a [`Mapper`].
+/// Configuration of a [`Mapper`]. With feature `serde` it (de)serializes,
+/// as every configuration does (JSON writes an infinite limit as `null`,
+/// which reads back as infinite).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct MapperConfig {
     /// The line detector.
     pub detector: Config,
@@ -163,5 +166,21 @@ impl Mapper {
     /// returned are final.
     pub fn trajectory(&self) -> Option<Vec<Option<Pose2>>> {
         self.loop_closing().map(LoopClosing::trajectory)
+    }
+}
+
+#[cfg(all(test, feature = "serde"))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_mapper_preset_round_trips_through_json() {
+        let with_paper_aiding =
+            MapperConfig { aiding: AidingConfig::paper(), ..Default::default() };
+        for config in [MapperConfig::paper(), MapperConfig::default(), with_paper_aiding] {
+            let json = serde_json::to_string(&config).unwrap();
+            let back: MapperConfig = serde_json::from_str(&json).unwrap();
+            assert_eq!(back, config, "{json}");
+        }
     }
 }

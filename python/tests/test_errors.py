@@ -92,7 +92,7 @@ def test_range_limits_and_stamp_are_checked(detector):
         ("no-such-preset", {}, "neither a preset"),
         ("default", {"fitting__eht": 30}, "detector.fitting.eht"),
         ("default", {"fitting__eth": "x"}, "detector.fitting.eth"),
-        ("default", {"fitting__eth": -1}, "eth"),
+        ("default", {"fitting__eth": -1}, "`detector.fitting.eth`"),
         ("default", {"fitting": {"eth": [1, 2]}}, "detector.fitting.eth"),
         ("default", {"fitting__eth": object()}, "fitting__eth"),
         (3, {}, "preset name or a configuration file"),

@@ -464,22 +464,12 @@ impl AidingConfig {
             ("aiding.max_heading_step_rad", self.max_heading_step_rad),
             ("aiding.max_translation_step_m", self.max_translation_step_m),
         ] {
-            ConfigError::check(v > 0.0 && v.is_finite(), field, v, "must be finite and > 0")?;
+            ConfigError::positive(field, v)?;
         }
         if let HeadingWeights::InverseVariance { floor_rad } = self.heading_weights {
-            ConfigError::check(
-                floor_rad > 0.0 && floor_rad.is_finite(),
-                "aiding.heading_weights.floor",
-                floor_rad,
-                "must be finite and > 0",
-            )?;
+            ConfigError::positive("aiding.heading_weights.inverse-variance.floor_rad", floor_rad)?;
         }
-        ConfigError::check(
-            (0.0..=1.0).contains(&self.min_information_ratio),
-            "aiding.min_information_ratio",
-            self.min_information_ratio,
-            "must be in [0, 1]",
-        )
+        ConfigError::unit_interval("aiding.min_information_ratio", self.min_information_ratio)
     }
 }
 

@@ -266,8 +266,10 @@ pub fn show(name: &str) -> Result<String> {
 fn merged_file(mut base: Value, overrides: &Value, label: &str) -> Result<ConfigFile> {
     merge(&mut base, overrides, "").map_err(|e| BadInput(format!("{label}: {e}")))?;
     let file: ConfigFile = base.try_into().map_err(|e| BadInput(format!("{label}: {e}")))?;
+    // The detector's own paths (`fitting.eth`) sit under `[detector]`.
     file.detector
         .validate()
+        .map_err(|e| e.within("detector"))
         .and_then(|()| file.map.validate())
         .and_then(|()| file.aiding.validate())
         .and_then(|()| file.loop_closure.validate())
@@ -369,6 +371,73 @@ mod tests {
                 .unwrap_err()
                 .to_string();
         assert!(e.contains("eth"), "{e}");
+    }
+
+    #[test]
+    fn errors_name_the_path_the_file_writes() {
+        let cases = [
+            ("default", "[detector.fitting]\neth = -1", "detector.fitting.eth"),
+            (
+                "default",
+                "[detector.segmentation.level1.Adaptive]\nlambda_rad = 3.0",
+                "detector.segmentation.level1.Adaptive.lambda_rad",
+            ),
+            (
+                "default",
+                "[detector.segmentation.level1.Adaptive.noise]\nfar_sigma_m = -1",
+                "detector.segmentation.level1.Adaptive.noise.far_sigma_m",
+            ),
+            (
+                "default",
+                "[detector.segmentation.level2.SplitAtFarthest]\nsigma_factor = 0",
+                "detector.segmentation.level2.SplitAtFarthest.sigma_factor",
+            ),
+            (
+                "default",
+                "[detector.fitting.merge.ResidualIncrease]\nmax_chi2 = -1",
+                "detector.fitting.merge.ResidualIncrease.max_chi2",
+            ),
+            (
+                "paper",
+                "[detector.fitting.merge.Angles]\nalpha_t_rad = -1",
+                "detector.fitting.merge.Angles.alpha_t_rad",
+            ),
+            (
+                "adaptive",
+                "[detector.noise_estimation]\nmin_samples = 1",
+                "detector.noise_estimation.min_samples",
+            ),
+            ("default", "[map]\nmax_d_alpha_rad = -1", "map.max_d_alpha_rad"),
+            ("default", "[map]\nmax_new_alpha_std_rad = 0", "map.max_new_alpha_std_rad"),
+            ("default", "[map.merge_gate]\nmax_gap_m = -1", "map.merge_gate.max_gap_m"),
+            (
+                "default",
+                "[map.lifecycle]\nstraightness_floor_m = -1",
+                "map.lifecycle.straightness_floor_m",
+            ),
+            ("default", "[aiding]\nmax_heading_step_rad = 0", "aiding.max_heading_step_rad"),
+            (
+                "default",
+                "[aiding.heading_weights.inverse-variance]\nfloor_rad = 0",
+                "aiding.heading_weights.inverse-variance.floor_rad",
+            ),
+            (
+                "default",
+                "[aiding.estimator.motion]\nrotation_per_m = -1",
+                "aiding.estimator.motion.rotation_per_m",
+            ),
+            (
+                "default",
+                "[aiding.estimator.adaptation]\nrate = -1",
+                "aiding.estimator.adaptation.rate",
+            ),
+            ("default", "[loop_closure]\nsearch_sigmas = -1", "loop_closure.search_sigmas"),
+        ];
+        for (preset, overrides, path) in cases {
+            let table: Value = toml::from_str(overrides).unwrap();
+            let e = resolve_with_overrides(preset, 0.01, &table, "kw").unwrap_err().to_string();
+            assert!(e.contains(&format!("`{path}`")), "{overrides}: {e}");
+        }
     }
 
     #[test]

@@ -20,10 +20,10 @@ use std::path::Path;
 
 /// The scenes, embedded.
 const SCENES: [(&str, &str); 4] = [
-    ("corridor-doors", include_str!("../../../sim-scenes/corridor-doors.toml")),
-    ("office-clutter", include_str!("../../../sim-scenes/office-clutter.toml")),
-    ("hall-pillars", include_str!("../../../sim-scenes/hall-pillars.toml")),
-    ("paper-maze", include_str!("../../../sim-scenes/paper-maze.toml")),
+    ("corridor-doors", include_str!("../scenes/corridor-doors.toml")),
+    ("office-clutter", include_str!("../scenes/office-clutter.toml")),
+    ("hall-pillars", include_str!("../scenes/hall-pillars.toml")),
+    ("paper-maze", include_str!("../scenes/paper-maze.toml")),
 ];
 
 /// Arguments of `pcaline eval`.

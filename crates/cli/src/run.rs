@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The default scene, embedded so `pcaline run` works from anywhere.
-const DEFAULT_SCENE: &str = include_str!("../../../sim-scenes/paper-maze.toml");
+const DEFAULT_SCENE: &str = include_str!("../scenes/paper-maze.toml");
 const DEFAULT_SCENE_NAME: &str = "sim-scenes/paper-maze.toml";
 
 /// Arguments of `pcaline run`.

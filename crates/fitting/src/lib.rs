@@ -174,36 +174,18 @@ impl FitConfig {
             "must be >= 3",
         )?;
         match self.merge {
-            MergeRule::Angles { alpha_t_rad } => ConfigError::check(
-                alpha_t_rad >= 0.0 && alpha_t_rad.is_finite(),
-                "fitting.merge.alpha_t",
-                alpha_t_rad,
-                "must be finite and >= 0",
-            ),
+            MergeRule::Angles { alpha_t_rad } => {
+                ConfigError::non_negative("fitting.merge.Angles.alpha_t_rad", alpha_t_rad)
+            }
             MergeRule::ResidualIncrease { max_chi2, noise } => {
-                ConfigError::check(
-                    max_chi2 > 0.0 && max_chi2.is_finite(),
-                    "fitting.merge.max_chi2",
-                    max_chi2,
-                    "must be finite and > 0",
-                )?;
-                noise.validate("fitting.merge.noise")
+                ConfigError::positive("fitting.merge.ResidualIncrease.max_chi2", max_chi2)?;
+                noise.validate("fitting.merge.ResidualIncrease.noise")
             }
             MergeRule::Never => Ok(()),
         }?;
-        ConfigError::check(
-            self.min_line_length_m >= 0.0 && self.min_line_length_m.is_finite(),
-            "fitting.min_line_length_m",
-            self.min_line_length_m,
-            "must be finite and >= 0",
-        )?;
+        ConfigError::non_negative("fitting.min_line_length_m", self.min_line_length_m)?;
         if let Some(t) = self.residual_test {
-            ConfigError::check(
-                t.max_sigmas > 0.0 && t.max_sigmas.is_finite(),
-                "fitting.residual_test.max_sigmas",
-                t.max_sigmas,
-                "must be finite and > 0",
-            )?;
+            ConfigError::positive("fitting.residual_test.max_sigmas", t.max_sigmas)?;
             t.noise.validate("fitting.residual_test.noise")?;
         }
         if let Some(t) = self.orientation_test {
@@ -216,11 +198,9 @@ impl FitConfig {
             t.noise.validate("fitting.orientation_test.noise")?;
         }
         if let Some(t) = self.straightness_test {
-            ConfigError::check(
-                t.max_bow_sigmas >= 0.0 && t.max_bow_sigmas.is_finite(),
+            ConfigError::non_negative(
                 "fitting.straightness_test.max_bow_sigmas",
                 t.max_bow_sigmas,
-                "must be finite and >= 0",
             )?;
             ConfigError::check(
                 t.max_runs_z.is_finite(),

@@ -42,6 +42,41 @@ impl ConfigError {
         Self::check_path(ok, || format!("{prefix}.{name}").into(), value, requirement)
     }
 
+    /// `value` must be finite and > 0 (the most common requirement).
+    pub fn positive(field: &'static str, value: f64) -> Result<(), ConfigError> {
+        Self::check(value > 0.0 && value.is_finite(), field, value, "must be finite and > 0")
+    }
+
+    /// `value` must be finite and >= 0.
+    pub fn non_negative(field: &'static str, value: f64) -> Result<(), ConfigError> {
+        Self::check(value >= 0.0 && value.is_finite(), field, value, "must be finite and >= 0")
+    }
+
+    /// `value` must lie in [0, 1].
+    pub fn unit_interval(field: &'static str, value: f64) -> Result<(), ConfigError> {
+        Self::check((0.0..=1.0).contains(&value), field, value, "must be in [0, 1]")
+    }
+
+    /// The same error for a configuration nested under `prefix`: the field
+    /// `fitting.eth` of a detector read from a file's `[detector]` section
+    /// becomes `detector.fitting.eth`, the path the file writes.
+    ///
+    /// ```
+    /// use pcaline_geometry::ConfigError;
+    /// let e = ConfigError::positive("fitting.eth", -1.0).unwrap_err();
+    /// assert!(e.within("detector").to_string().contains("`detector.fitting.eth`"));
+    /// ```
+    #[must_use]
+    pub fn within(self, prefix: &str) -> Self {
+        match self {
+            ConfigError::OutOfRange { field, value, requirement } => ConfigError::OutOfRange {
+                field: format!("{prefix}.{field}").into(),
+                value,
+                requirement,
+            },
+        }
+    }
+
     /// The check both share; a NaN value always fails.
     fn check_path(
         ok: bool,

@@ -47,12 +47,20 @@ impl RangeNoise {
         if range_m < self.far_from_m { self.near_sigma_m } else { self.far_sigma_m }
     }
 
-    /// Checks that both sigmas are finite and non-negative.
-    pub fn validate(&self, field: &'static str) -> Result<(), ConfigError> {
-        for s in [self.near_sigma_m, self.far_sigma_m] {
-            ConfigError::check(s.is_finite() && s >= 0.0, field, s, "must be finite and >= 0")?;
+    /// Checks that both sigmas are finite and non-negative and the far
+    /// range is not negative; errors name `prefix.near_sigma_m` and so on.
+    pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
+        for (name, s) in [("near_sigma_m", self.near_sigma_m), ("far_sigma_m", self.far_sigma_m)] {
+            ConfigError::check_field(
+                s >= 0.0 && s.is_finite(),
+                prefix,
+                name,
+                s,
+                "must be finite and >= 0",
+            )?;
         }
-        ConfigError::check(self.far_from_m >= 0.0, field, self.far_from_m, "must be >= 0")
+        let far = self.far_from_m;
+        ConfigError::check_field(far >= 0.0, prefix, "far_from_m", far, "must be >= 0")
     }
 }
 

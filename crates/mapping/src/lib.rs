@@ -122,34 +122,24 @@ impl MapConfig {
     pub fn validate(&self) -> Result<(), ConfigError> {
         ConfigError::check(
             self.max_d_alpha_rad > 0.0 && self.max_d_alpha_rad < std::f64::consts::FRAC_PI_2,
-            "mapping.max_d_alpha",
+            "map.max_d_alpha_rad",
             self.max_d_alpha_rad,
             "must be in (0, pi/2)",
         )?;
-        ConfigError::check(
-            self.max_d_rho_m > 0.0 && self.max_d_rho_m.is_finite(),
-            "mapping.max_d_rho_m",
-            self.max_d_rho_m,
-            "must be finite and > 0",
-        )?;
+        ConfigError::positive("map.max_d_rho_m", self.max_d_rho_m)?;
         if let Some(a) = self.max_new_alpha_std_rad {
-            ConfigError::check(a > 0.0, "mapping.max_new_alpha_std", a, "must be > 0")?;
+            ConfigError::check(a > 0.0, "map.max_new_alpha_std_rad", a, "must be > 0")?;
         }
         if let Some(g) = self.merge_gate {
             for (field, v) in [
-                ("mapping.merge_gate.max_offset_m", g.max_offset_m),
-                ("mapping.merge_gate.max_gap_m", g.max_gap_m),
+                ("map.merge_gate.max_offset_m", g.max_offset_m),
+                ("map.merge_gate.max_gap_m", g.max_gap_m),
             ] {
-                ConfigError::check(v >= 0.0 && v.is_finite(), field, v, "must be finite and >= 0")?;
+                ConfigError::non_negative(field, v)?;
             }
         }
         if let Some(o) = self.max_offset_m {
-            ConfigError::check(
-                o > 0.0 && o.is_finite(),
-                "mapping.max_offset_m",
-                o,
-                "must be finite and > 0",
-            )?;
+            ConfigError::positive("map.max_offset_m", o)?;
         }
         if let Some(l) = &self.lifecycle {
             l.validate()?;

@@ -86,12 +86,7 @@ impl Lifecycle {
             self.max_straightness_ratio,
             "must be finite and >= 1",
         )?;
-        ConfigError::check(
-            self.straightness_floor_m >= 0.0 && self.straightness_floor_m.is_finite(),
-            "map.lifecycle.straightness_floor_m",
-            self.straightness_floor_m,
-            "must be finite and >= 0",
-        )
+        ConfigError::non_negative("map.lifecycle.straightness_floor_m", self.straightness_floor_m)
     }
 
     /// The status of a line seen in `scans` distinct scans whose absorbed

@@ -138,26 +138,21 @@ impl BreakRule {
 
     fn validate(&self) -> Result<(), ConfigError> {
         match *self {
-            BreakRule::Fixed { dth_m } => ConfigError::check(
-                dth_m > 0.0 && dth_m.is_finite(),
-                "segmentation.level1.dth_m",
-                dth_m,
-                "must be finite and > 0",
-            ),
+            BreakRule::Fixed { dth_m } => {
+                ConfigError::positive("segmentation.level1.Fixed.dth_m", dth_m)
+            }
             BreakRule::Adaptive { lambda_rad, sigma_factor, noise, .. } => {
                 ConfigError::check(
                     lambda_rad > 0.0 && lambda_rad < std::f64::consts::FRAC_PI_2,
-                    "segmentation.level1.lambda",
+                    "segmentation.level1.Adaptive.lambda_rad",
                     lambda_rad,
                     "must be in (0, pi/2)",
                 )?;
-                ConfigError::check(
-                    sigma_factor >= 0.0 && sigma_factor.is_finite(),
-                    "segmentation.level1.sigma_factor",
+                ConfigError::non_negative(
+                    "segmentation.level1.Adaptive.sigma_factor",
                     sigma_factor,
-                    "must be finite and >= 0",
                 )?;
-                noise.validate("segmentation.level1.noise")
+                noise.validate("segmentation.level1.Adaptive.noise")
             }
         }
     }
@@ -254,19 +249,15 @@ impl SegmentationConfig {
             "must be >= 2",
         )?;
         if let Level2Rule::SplitAtFarthest { sigma_factor, min_distance_m, noise } = self.level2 {
-            ConfigError::check(
-                sigma_factor > 0.0 && sigma_factor.is_finite(),
-                "segmentation.level2.sigma_factor",
+            ConfigError::positive(
+                "segmentation.level2.SplitAtFarthest.sigma_factor",
                 sigma_factor,
-                "must be finite and > 0",
             )?;
-            ConfigError::check(
-                min_distance_m >= 0.0 && min_distance_m.is_finite(),
-                "segmentation.level2.min_distance_m",
+            ConfigError::non_negative(
+                "segmentation.level2.SplitAtFarthest.min_distance_m",
                 min_distance_m,
-                "must be finite and >= 0",
             )?;
-            noise.validate("segmentation.level2.noise")?;
+            noise.validate("segmentation.level2.SplitAtFarthest.noise")?;
         }
         Ok(())
     }

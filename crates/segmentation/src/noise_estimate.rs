@@ -96,42 +96,34 @@ impl NoiseEstimation {
     pub fn validate(&self) -> Result<(), ConfigError> {
         ConfigError::check(
             self.min_samples >= 3,
-            "segmentation.noise_estimation.min_samples",
+            "noise_estimation.min_samples",
             self.min_samples as f64,
             "must be >= 3",
         )?;
         ConfigError::check(
             self.min_scale >= 0.0 && self.min_scale <= 1.0,
-            "segmentation.noise_estimation.min_scale",
+            "noise_estimation.min_scale",
             self.min_scale,
             "must be in [0, 1]",
         )?;
         ConfigError::check(
             self.max_scale >= 1.0 && self.max_scale.is_finite(),
-            "segmentation.noise_estimation.max_scale",
+            "noise_estimation.max_scale",
             self.max_scale,
             "must be finite and >= 1",
         )?;
-        ConfigError::check(
-            self.floor_m >= 0.0 && self.floor_m.is_finite(),
-            "segmentation.noise_estimation.floor_m",
-            self.floor_m,
-            "must be finite and >= 0",
-        )?;
+        ConfigError::non_negative("noise_estimation.floor_m", self.floor_m)?;
         ConfigError::check(
             self.consistent_scale >= 1.0 && self.consistent_scale.is_finite(),
-            "segmentation.noise_estimation.consistent_scale",
+            "noise_estimation.consistent_scale",
             self.consistent_scale,
             "must be finite and >= 1",
         )?;
         match self.range_grid {
             RangeGrid::Detect => Ok(()),
-            RangeGrid::Known { step_m } => ConfigError::check(
-                (0.0..=1.0).contains(&step_m),
-                "segmentation.noise_estimation.range_grid.step_m",
-                step_m,
-                "must be in [0, 1]",
-            ),
+            RangeGrid::Known { step_m } => {
+                ConfigError::unit_interval("noise_estimation.range_grid.Known.step_m", step_m)
+            }
         }
     }
 }

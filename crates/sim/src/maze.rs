@@ -100,14 +100,9 @@ impl MazeConfig {
             ("maze.loop_probability", self.loop_probability),
             ("maze.room_probability", self.room_probability),
         ] {
-            ConfigError::check((0.0..=1.0).contains(&p), field, p, "must be in [0, 1]")?;
+            ConfigError::unit_interval(field, p)?;
         }
-        ConfigError::check(
-            self.speed_m_s > 0.0 && self.speed_m_s.is_finite(),
-            "maze.speed_m_s",
-            self.speed_m_s,
-            "must be finite and > 0",
-        )
+        ConfigError::positive("maze.speed_m_s", self.speed_m_s)
     }
 }
 

@@ -169,12 +169,7 @@ impl SensorModel {
             self.range_max_m,
             "must be finite",
         )?;
-        ConfigError::check(
-            self.rate_hz > 0.0 && self.rate_hz.is_finite(),
-            "sensor.rate_hz",
-            self.rate_hz,
-            "must be finite and > 0",
-        )?;
+        ConfigError::positive("sensor.rate_hz", self.rate_hz)?;
         self.noise.validate("sensor.noise")?;
         ConfigError::check(
             self.range_resolution_m >= 0.0 && self.range_resolution_m <= 1.0,
@@ -187,21 +182,11 @@ impl SensorModel {
             ("sensor.dropout_probability", self.faults.dropout_probability),
             ("sensor.mixed_pixel_probability", self.faults.mixed_pixel_probability),
         ] {
-            ConfigError::check((0.0..=1.0).contains(&p), field, p, "must be in [0, 1]")?;
+            ConfigError::unit_interval(field, p)?;
         }
-        ConfigError::check(
-            self.faults.outlier_max_m >= 0.0 && self.faults.outlier_max_m.is_finite(),
-            "sensor.outlier_max_m",
-            self.faults.outlier_max_m,
-            "must be finite and >= 0",
-        )?;
+        ConfigError::non_negative("sensor.outlier_max_m", self.faults.outlier_max_m)?;
         if let Some(t) = self.tilt {
-            ConfigError::check(
-                t.period_s > 0.0 && t.period_s.is_finite(),
-                "sensor.tilt.period_s",
-                t.period_s,
-                "must be finite and > 0",
-            )?;
+            ConfigError::positive("sensor.tilt.period_s", t.period_s)?;
             for (field, a) in [
                 ("sensor.tilt.roll_amplitude", t.roll_amplitude_rad),
                 ("sensor.tilt.pitch_amplitude", t.pitch_amplitude_rad),
