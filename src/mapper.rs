@@ -22,6 +22,14 @@ pub struct MapperConfig {
     pub aiding: AidingConfig,
     /// Loop closure on top of the aiding (`None`: off).
     pub loop_closure: Option<LoopClosureConfig>,
+    /// Where the LIDAR sits on the vehicle (`vehicle_from_sensor`: its
+    /// offset forward and left in metres, and its yaw). The localization
+    /// source gives `world_from_vehicle` and the mapper returns it; the
+    /// map and the aiding work in `world_from_sensor = world_from_vehicle
+    /// ∘ vehicle_from_sensor`. Identity (the default): the source gives the
+    /// sensor's own pose, as the paper's setup and most logs do.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub vehicle_from_sensor: Pose2,
 }
 
 impl MapperConfig {
@@ -33,6 +41,7 @@ impl MapperConfig {
             map: MapConfig::paper(),
             aiding: AidingConfig::paper(),
             loop_closure: None,
+            vehicle_from_sensor: Pose2::identity(),
         }
     }
 }
@@ -46,6 +55,7 @@ impl Default for MapperConfig {
             map: MapConfig::default(),
             aiding: AidingConfig::estimator(),
             loop_closure: Some(LoopClosureConfig::standard()),
+            vehicle_from_sensor: Pose2::identity(),
         }
     }
 }
@@ -53,8 +63,12 @@ impl Default for MapperConfig {
 /// What one scan did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MapperStep {
-    /// The corrected `world_from_sensor`.
+    /// The corrected `world_from_vehicle` (`world_from_sensor` with the
+    /// default mount).
     pub pose: Pose2,
+    /// The corrected `world_from_sensor`, the pose the scan's lines were
+    /// placed with.
+    pub world_from_sensor: Pose2,
     /// Lines detected in the scan.
     pub lines: usize,
     /// The aiding's report.
@@ -80,6 +94,8 @@ pub struct MapperStep {
 pub struct Mapper {
     detector: LineDetector,
     localizer: Localizer,
+    vehicle_from_sensor: Pose2,
+    sensor_from_vehicle: Pose2,
     /// The last scan's lines, as detected and as the localizer takes them.
     detected: Vec<DetectedLine>,
     lines: Vec<SensorLine>,
@@ -90,9 +106,21 @@ pub struct Mapper {
 impl Mapper {
     /// A mapper with an empty map.
     pub fn new(config: MapperConfig) -> Result<Self, ConfigError> {
+        let mount = config.vehicle_from_sensor;
+        for (name, v) in [("x", mount.x), ("y", mount.y), ("heading", mount.heading)] {
+            ConfigError::check_field(
+                v.is_finite(),
+                "vehicle_from_sensor",
+                name,
+                v,
+                "must be finite",
+            )?;
+        }
         Ok(Mapper {
             detector: LineDetector::new(config.detector)?,
             localizer: Localizer::new(config.aiding, config.map, config.loop_closure)?,
+            vehicle_from_sensor: mount,
+            sensor_from_vehicle: mount.inverse(),
             detected: Vec::new(),
             lines: Vec::new(),
             last_source: None,
@@ -100,27 +128,40 @@ impl Mapper {
     }
 
     /// Processes one scan with the localization source's pose estimate for
-    /// it. A stamped scan ([`Scan::stamp_s`]) lets the estimator learn the
-    /// source's heading-rate bias, and a stamp going backwards skips it.
-    pub fn process(&mut self, scan: &Scan, source_pose: &Pose2) -> MapperStep {
+    /// it, `world_from_vehicle`. A stamped scan ([`Scan::stamp_s`]) lets the
+    /// estimator learn the source's heading-rate bias, and a stamp going
+    /// backwards skips it.
+    pub fn process(&mut self, scan: &Scan, world_from_vehicle: &Pose2) -> MapperStep {
+        let source = world_from_vehicle.compose(&self.vehicle_from_sensor);
         // Deskew with the source's velocity over the last step, when stamped.
         let velocity = match (self.last_source, scan.stamp_s) {
-            (Some((t0, p0)), Some(t)) => p0.velocity_to(source_pose, t - t0),
+            (Some((t0, p0)), Some(t)) => p0.velocity_to(&source, t - t0),
             _ => None,
         };
-        self.last_source = scan.stamp_s.map(|t| (t, *source_pose));
+        self.last_source = scan.stamp_s.map(|t| (t, source));
         self.detect(scan, velocity);
-        let (pose, report) = self.localizer.step_with(scan.stamp_s, source_pose, &self.lines);
-        MapperStep { pose, lines: self.lines.len(), report }
+        let (pose, report) = self.localizer.step_with(scan.stamp_s, &source, &self.lines);
+        self.step(pose, report)
     }
 
     /// Processes one scan without a localization source (LIDAR-only mode):
     /// the last estimated motion is the prediction, the line matches
     /// estimate the motion.
     pub fn process_without_source(&mut self, scan: &Scan) -> MapperStep {
+        self.last_source = None;
         self.detect(scan, self.localizer.velocity());
         let (pose, report) = self.localizer.step_without_source(scan.stamp_s, &self.lines);
-        MapperStep { pose, lines: self.lines.len(), report }
+        self.step(pose, report)
+    }
+
+    /// The step's record from the corrected `world_from_sensor`.
+    fn step(&self, world_from_sensor: Pose2, report: StepReport) -> MapperStep {
+        MapperStep {
+            pose: world_from_sensor.compose(&self.sensor_from_vehicle),
+            world_from_sensor,
+            lines: self.lines.len(),
+            report,
+        }
     }
 
     /// Detects the scan's lines, deskewed with `velocity` when the scan
@@ -145,9 +186,15 @@ impl Mapper {
         self.localizer.map()
     }
 
-    /// The latest corrected pose.
+    /// The latest corrected `world_from_vehicle`.
     pub fn pose(&self) -> Option<Pose2> {
-        self.localizer.pose()
+        self.localizer.pose().map(|p| p.compose(&self.sensor_from_vehicle))
+    }
+
+    /// The localizer (the aiding, and loop closure when on): its map,
+    /// velocity and graph, in the sensor's frame (`world_from_sensor`).
+    pub fn localizer(&self) -> &Localizer {
+        &self.localizer
     }
 
     /// The loop closure (its graph, keyframes and loops), when on.
@@ -161,11 +208,12 @@ impl Mapper {
         self.localizer.optimize()
     }
 
-    /// Every processed scan's pose as the pose graph now places it (loop
-    /// closure on), `None` without loop closure: then the poses the steps
-    /// returned are final.
+    /// Every processed scan's `world_from_vehicle` as the pose graph now
+    /// places it (loop closure on), `None` without loop closure: then the
+    /// poses the steps returned are final.
     pub fn trajectory(&self) -> Option<Vec<Option<Pose2>>> {
-        self.loop_closing().map(LoopClosing::trajectory)
+        let to_vehicle = |p: Option<Pose2>| p.map(|p| p.compose(&self.sensor_from_vehicle));
+        self.loop_closing().map(|l| l.trajectory().into_iter().map(to_vehicle).collect())
     }
 }
 
@@ -182,5 +230,46 @@ mod tests {
             let back: MapperConfig = serde_json::from_str(&json).unwrap();
             assert_eq!(back, config, "{json}");
         }
+    }
+}
+
+#[cfg(test)]
+mod mount_tests {
+    use super::*;
+    use pcaline_sim::{MazeConfig, Simulator, generate_maze};
+
+    #[test]
+    fn a_mounted_sensor_maps_as_the_sensor_itself() {
+        let scene =
+            generate_maze(&MazeConfig { cols: 3, rows: 2, ..MazeConfig::small("mount") }, 5)
+                .unwrap();
+        let sim = Simulator::new(&scene, 3).unwrap();
+        // 30 cm forward, 10 cm right, turned 0.2 rad to the left.
+        let vehicle_from_sensor = Pose2::new(0.3, -0.1, 0.2);
+        let sensor_from_vehicle = vehicle_from_sensor.inverse();
+        let mut plain = Mapper::new(MapperConfig::default()).unwrap();
+        let mut mounted =
+            Mapper::new(MapperConfig { vehicle_from_sensor, ..MapperConfig::default() }).unwrap();
+        let close = |a: &Pose2, b: &Pose2| {
+            (a.x - b.x).abs() < 1e-6
+                && (a.y - b.y).abs() < 1e-6
+                && pcaline_geometry::wrap_angle(a.heading - b.heading).abs() < 1e-9
+        };
+        for frame in sim.frames().step_by(4) {
+            let world_from_sensor = frame.odometry_pose;
+            let world_from_vehicle = world_from_sensor.compose(&sensor_from_vehicle);
+            let a = plain.process(&frame.scan, &world_from_sensor);
+            let b = mounted.process(&frame.scan, &world_from_vehicle);
+            assert!(close(&b.world_from_sensor, &a.pose), "scan {}", frame.index);
+            assert!(close(&b.pose, &a.pose.compose(&sensor_from_vehicle)), "scan {}", frame.index);
+            assert_eq!(a.lines, b.lines);
+        }
+        assert!(plain.map().len() > 10);
+        assert_eq!(plain.map().len(), mounted.map().len());
+        let (p, m) = (plain.pose().unwrap(), mounted.pose().unwrap());
+        assert!(close(&m, &p.compose(&sensor_from_vehicle)));
+        let bad = Pose2 { x: f64::NAN, ..Pose2::identity() };
+        let e = Mapper::new(MapperConfig { vehicle_from_sensor: bad, ..MapperConfig::default() });
+        assert!(e.unwrap_err().to_string().contains("vehicle_from_sensor.x"));
     }
 }

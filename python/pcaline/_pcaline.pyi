@@ -187,6 +187,7 @@ class Mapper:
         config: Optional[PathLike] = None,
         aiding: str = "estimator",
         loop_closure: bool = True,
+        mount: Optional[Pose] = None,
         **overrides: Any,
     ) -> None: ...
     def step(self, scan: Scan, pose: Optional[Pose] = None) -> Step: ...

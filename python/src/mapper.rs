@@ -44,14 +44,18 @@ impl PyMapper {
     /// `loop_closure` adds keyframes, loop closure and a pose graph.
     /// `overrides` are field paths of the configuration file's form,
     /// section first: `detector__fitting__eth=30`, `map__max_offset_m=0.2`,
-    /// `aiding__estimator__motion__rotation_per_m=0.02`. Raises
-    /// `ValueError` naming the field for a bad configuration.
+    /// `aiding__estimator__motion__rotation_per_m=0.02`. `mount` is where
+    /// the LIDAR sits on the vehicle whose poses `step` is given,
+    /// `vehicle_from_sensor` as `(x_m, y_m, heading_rad)`; the poses the
+    /// mapper returns are then the vehicle's too. Raises `ValueError`
+    /// naming the field for a bad configuration.
     #[new]
-    #[pyo3(signature = (config=None, aiding="estimator", loop_closure=true, **overrides))]
+    #[pyo3(signature = (config=None, aiding="estimator", loop_closure=true, mount=None, **overrides))]
     fn new(
         config: Option<&Bound<'_, PyAny>>,
         aiding: &str,
         loop_closure: bool,
+        mount: Option<(f64, f64, f64)>,
         overrides: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let named = config::resolve(config, None, overrides)?;
@@ -70,12 +74,14 @@ impl PyMapper {
             map: named.map,
             aiding,
             loop_closure: loop_closure.then_some(named.loop_closure),
+            vehicle_from_sensor: mount.map(|m| pose_from(m, "mount")).transpose()?.unwrap_or_default(),
         };
         Ok(PyMapper { mapper: Mapper::new(config).map_err(value_error)? })
     }
 
     /// Processes one scan. `pose` is the localization source's
-    /// `world_from_sensor` for it, `(x_m, y_m, heading_rad)`; without one
+    /// `world_from_vehicle` for it (`world_from_sensor` without a mount),
+    /// `(x_m, y_m, heading_rad)`; without one
     /// the mapper runs on the lines alone (the last estimated motion
     /// predicts). A stamped scan lets the estimator learn the source's
     /// heading-rate bias and deskew the scan. The Python lock is released

@@ -127,3 +127,21 @@ def test_scoring_follows_the_protocol():
     assert oracle.recall == 1.0 and oracle.false_positive_fraction == 0.0
     assert same.counts == score.counts
     assert oracle.alpha_error[1] < 1e-9
+
+
+def test_a_mount_returns_the_vehicles_pose():
+    """LIDAR-only mode works in the sensor's frame: a mount changes only the
+    poses returned, by exactly the mount."""
+    simulator = sim.Simulator(sim.generate_maze(5, cols=2, rows=2), seed=3)
+    plain = pcaline.Mapper(loop_closure=False)
+    mounted = pcaline.Mapper(loop_closure=False, mount=(0.3, 0.0, np.pi / 2))
+    for k in range(0, 60, 3):
+        scan = simulator[k].scan
+        (x, y, h), (vx, vy, vh) = plain.step(scan).pose, mounted.step(scan).pose
+        # vehicle = sensor o inverse(mount): 0.3 m behind the sensor's x axis,
+        # turned a quarter back.
+        back = h - np.pi / 2
+        np.testing.assert_allclose([vx, vy], [x - 0.3 * np.cos(back), y - 0.3 * np.sin(back)], atol=1e-9)
+        assert abs(np.angle(np.exp(1j * (vh - back)))) < 1e-9
+    with pytest.raises(ValueError, match="mount"):
+        pcaline.Mapper(mount=(0.0, float("nan"), 0.0))

@@ -10,8 +10,8 @@ use crate::progress;
 use crate::svg::{Mark, Plot};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
-use pcaline::LineDetector;
-use pcaline::aiding::{AidingMode, EdgeKind, Localizer, LoopOutcome, SensorLine};
+use pcaline::aiding::{AidingMode, EdgeKind, LoopOutcome};
+use pcaline::{Mapper, MapperConfig, Pose2};
 use pcaline_io::{
     LogRecord, OutputSet, PoseKind, json_bytes, map_csv_text, map_json_bytes, read_log,
 };
@@ -38,7 +38,8 @@ pub enum AidingArg {
   pcaline map intel.gfs.log --out out/intel --png       map, trajectory, graph, pictures
   pcaline map raw.clf --translation-noise-per-m 0.1     a noisier odometry
   pcaline map bag_dir --mcap out/run.mcap                also every scan for Foxglove
-  pcaline map log.clf --aiding heading --no-loop-closure   the paper's aiding alone")]
+  pcaline map log.clf --aiding heading --no-loop-closure   the paper's aiding alone
+  pcaline map robot.bag --mount 0.25,0,180              a LIDAR 25 cm ahead, mounted backwards")]
 pub struct MapArgs {
     /// Log with scans (CARMEN, ROS 1 bag, ROS 2 bag or folder, MCAP, JSON, CSV).
     log: PathBuf,
@@ -64,6 +65,13 @@ pub struct MapArgs {
     /// undo the drift when the log returns to a mapped place).
     #[arg(long)]
     no_loop_closure: bool,
+    /// Where the LIDAR sits on the vehicle whose poses the log gives:
+    /// `X_M,Y_M,YAW_DEG` (forward, left, counter-clockwise). The trajectory
+    /// is written for the vehicle; the map, the scans and Foxglove's poses
+    /// are placed with the sensor's. Default: the log's poses are the
+    /// sensor's.
+    #[arg(long, value_name = "X_M,Y_M,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
+    mount: Option<Pose2>,
     /// Output folder.
     #[arg(long, default_value = "out/map")]
     out: PathBuf,
@@ -77,13 +85,25 @@ pub struct MapArgs {
     mcap: Option<PathBuf>,
 }
 
+/// `X_M,Y_M,YAW_DEG` as `vehicle_from_sensor`.
+fn parse_mount(text: &str) -> Result<Pose2, String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let values = parts.iter().map(|p| p.parse::<f64>()).collect::<Result<Vec<_>, _>>();
+    match values.as_deref() {
+        Ok([x, y, yaw_deg]) if [x, y, yaw_deg].iter().all(|v| v.is_finite()) => {
+            Ok(Pose2::new(*x, *y, yaw_deg.to_radians()))
+        }
+        _ => Err(format!("{text:?}: expected three finite numbers X_M,Y_M,YAW_DEG")),
+    }
+}
+
 #[derive(Debug, Serialize)]
 struct PoseOut {
     scan: usize,
     stamp_s: Option<f64>,
     /// The source pose (odometry), x, y, heading; absent when the log has none.
     source: Option<[f64; 3]>,
-    /// The corrected pose.
+    /// The corrected pose (of the vehicle, with `--mount`).
     aided: [f64; 3],
     matches: usize,
 }
@@ -111,60 +131,59 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
     let sensor = args.input.sensor(&args.log, config.sensor)?;
-    let mut detector = LineDetector::new(config.detector_for(sensor))?;
-    let loops = (!args.no_loop_closure).then_some(config.loop_closure);
-    let mut aiding = Localizer::new(aiding_config, config.map, loops)?;
+    let mount = args.mount.unwrap_or_default();
+    let mut mapper = Mapper::new(MapperConfig {
+        detector: config.detector_for(sensor),
+        map: config.map,
+        aiding: aiding_config,
+        loop_closure: (!args.no_loop_closure).then_some(config.loop_closure),
+        vehicle_from_sensor: mount,
+    })?;
     let bar = progress::spinner("scans", quiet);
     let mut poses: Vec<PoseOut> = Vec::new();
-    let mut lines: Vec<SensorLine> = Vec::new();
     let mut without_odometry = 0;
-    let mut last_source: Option<(f64, pcaline::Pose2)> = None;
     let mut sharpness = pcaline_eval::OccupiedCells::new(0.05);
     let mut mcap = McapOut::create(args.mcap.as_deref())?;
     let mut failed: Option<anyhow::Error> = None;
     read_log(&args.log, &args.input.options()?, |record| {
         let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
-        lines.clear();
         // Deskewed with the velocity of the last step (the source's, or the
         // estimator's without one), when the scan has its beam timing (ROS
         // time_increment).
         let source = s.odometry.or(s.pose);
-        let velocity = match (last_source, source, s.scan.stamp_s) {
-            (Some((t0, p0)), Some(p), Some(t)) => p0.velocity_to(&p, t - t0),
-            (_, None, _) => aiding.velocity(),
-            _ => None,
-        };
-        last_source = s.scan.stamp_s.zip(source);
-        lines.extend(
-            detector.detect_moving(&s.scan, velocity.as_ref()).lines.iter().map(SensorLine::from),
-        );
-        let (pose, report) = match (source, s.scan.stamp_s) {
-            (Some(p), stamp) => aiding.step_with(stamp, &p, &lines),
-            (None, stamp) => {
+        let step = match source {
+            Some(p) => mapper.process(&s.scan, &p),
+            None => {
                 // No motion source: LIDAR-only mode, the last estimated
                 // motion repeated as the prediction, the lines estimating it.
                 without_odometry += 1;
-                aiding.step_without_source(stamp, &lines)
+                mapper.process_without_source(&s.scan)
             }
         };
-        sharpness.add(&s.scan, &pose);
+        sharpness.add(&s.scan, &step.world_from_sensor);
         if let Some(m) = mcap.as_mut() {
             let stamp = m.stamp(s.scan.stamp_s);
-            let poses = [(PoseKind::Source, source), (PoseKind::Corrected, Some(pose))];
+            let source_sensor = source.map(|p| p.compose(&mount));
+            let poses = [
+                (PoseKind::Source, source_sensor),
+                (PoseKind::Corrected, Some(step.world_from_sensor)),
+            ];
+            let lines = mapper.lines().iter().map(|l| &l.line);
             let written = m
-                .scan(stamp, &s.scan, lines.iter().map(|l| &l.line), &poses)
-                .and_then(|()| m.map_if_due(stamp, aiding.map()));
+                .scan(stamp, &s.scan, lines, &poses)
+                .and_then(|()| m.map_if_due(stamp, mapper.map()));
             if let Err(e) = written {
                 failed = Some(e);
                 return ControlFlow::Break(());
             }
         }
+        let pose = step.pose;
         poses.push(PoseOut {
             scan: poses.len(),
             stamp_s: s.scan.stamp_s,
             source: source.map(|p| [p.x, p.y, p.heading]),
             aided: [pose.x, pose.y, pose.heading],
-            matches: report.matches,
+            matches: step.report.matches,
         });
         bar.inc(1);
         ControlFlow::Continue(())
@@ -176,9 +195,9 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     if poses.is_empty() {
         return Err(BadInput(format!("{}: no scans", args.log.display())).into());
     }
-    let graph = finish(&mut aiding, &mut poses);
+    let graph = finish(&mut mapper, &mut poses);
     if let Some(m) = mcap.as_mut() {
-        m.final_map(aiding.map())?;
+        m.final_map(mapper.map())?;
     }
     // An output folder that cannot be made (a file in its path, no
     // permission) is the user's argument: exit 2, naming the folder.
@@ -188,15 +207,15 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     // Written as a set: a failure part-way (a full disk) leaves none of them.
     let mut outputs = OutputSet::new();
     let path = args.out.join("map.json");
-    outputs.add(&path, &map_json_bytes(&path, aiding.map())?)?;
-    outputs.add(&args.out.join("map.csv"), map_csv_text(aiding.map()).as_bytes())?;
+    outputs.add(&path, &map_json_bytes(&path, mapper.map())?)?;
+    outputs.add(&args.out.join("map.csv"), map_csv_text(mapper.map()).as_bytes())?;
     let path = args.out.join("trajectory.json");
     outputs.add(&path, &json_bytes(&path, &poses)?)?;
     if let Some(g) = &graph {
         let path = args.out.join("graph.json");
         outputs.add(&path, &json_bytes(&path, g)?)?;
     }
-    let svg = draw(aiding.map(), &poses, graph.as_ref(), &args.log.display().to_string());
+    let svg = draw(mapper.map(), &poses, graph.as_ref(), &args.log.display().to_string());
     add_svg_and_png(&mut outputs, &args.out, "map", &svg, args.png)?;
     let written = outputs.commit()?;
     let mcap_path = mcap.map(|m| m.finish(quiet)).transpose()?;
@@ -206,7 +225,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
              online trajectory; fewer is sharper){}{}",
             args.log.display(),
             poses.len(),
-            aiding.map().len(),
+            mapper.map().len(),
             sharpness.count(),
             graph.as_ref().map_or(String::new(), |g| format!(
                 ", {} keyframes, {} loops accepted ({} switched off by the optimizer, {} \
@@ -237,9 +256,10 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
 
 /// With loop closure: a last optimization, the trajectory replaced by the
 /// optimized one, and the graph to write.
-fn finish(runner: &mut Localizer, poses: &mut [PoseOut]) -> Option<GraphOut> {
-    let trajectory = runner.finish()?;
-    let l = runner.loop_closing()?;
+fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
+    mapper.optimize()?;
+    let trajectory = mapper.trajectory()?;
+    let l = mapper.loop_closing()?;
     for (out, p) in poses.iter_mut().zip(trajectory) {
         if let Some(p) = p {
             out.aided = [p.x, p.y, p.heading];

@@ -5,7 +5,7 @@
 mod common;
 
 use common::{data, json_lines, pcaline, root, s, small_maze, tmp};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// A JSON scan file `name` of a wall 2 m ahead, 241 beams of 0.25°, ranges
@@ -176,6 +176,46 @@ fn map_and_draw_on_real_data() {
         assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
         let out = pcaline(&["draw", "scan", s(&path), "--index", "100000", "-o", s(&svg)]);
         assert_eq!(out.status.code(), Some(2));
+    }
+}
+
+#[test]
+fn map_with_a_sensor_mount_writes_the_vehicles_trajectory() {
+    // The ROS 1 bag has no odometry: LIDAR-only mode works in the sensor's
+    // frame, so a mount changes only the trajectory written, by exactly
+    // the mount.
+    let Some(path) = data("ros1/laser_scan_matcher_demo.bag") else { return };
+    let (plain, mounted) = (tmp("mount-none"), tmp("mount-25cm"));
+    let out = pcaline(&["--quiet", "map", s(&path), "--out", s(&plain)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out =
+        pcaline(&["--quiet", "map", s(&path), "--mount", "0.25,-0.1,30", "--out", s(&mounted)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let read = |dir: &Path, name: &str| std::fs::read(dir.join(name)).unwrap();
+    assert_eq!(read(&plain, "map.json"), read(&mounted, "map.json"));
+    let poses = |dir: &Path| -> Vec<[f64; 3]> {
+        let v: serde_json::Value = serde_json::from_slice(&read(dir, "trajectory.json")).unwrap();
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|p| std::array::from_fn(|k| p["aided"][k].as_f64().unwrap()))
+            .collect()
+    };
+    let sensor_from_vehicle = pcaline::Pose2::new(0.25, -0.1, 30f64.to_radians()).inverse();
+    let (a, b) = (poses(&plain), poses(&mounted));
+    assert_eq!(a.len(), b.len());
+    assert!(a.len() > 300);
+    for (s, v) in a.iter().zip(&b) {
+        let expected = pcaline::Pose2::new(s[0], s[1], s[2]).compose(&sensor_from_vehicle);
+        assert!(
+            (expected.x - v[0]).abs() < 1e-9 && (expected.y - v[1]).abs() < 1e-9,
+            "{s:?} {v:?}"
+        );
+    }
+    for bad in ["0.25,0.1", "1,nan,0", "a,b,c"] {
+        let out = pcaline(&["--quiet", "map", s(&path), "--mount", bad, "--out", s(&plain)]);
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--mount"), "{bad}");
     }
 }
 

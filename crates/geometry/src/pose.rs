@@ -16,6 +16,9 @@ use nalgebra::{Point2, Vector2};
 /// assert!((back - Point2::new(1.0, 0.0)).norm() < 1e-12);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+// Read through `Pose2::new`, which wraps the heading.
+#[cfg_attr(feature = "serde", serde(from = "PoseFields"))]
 pub struct Pose2 {
     /// Position x in the parent frame, metres.
     pub x: f64,
@@ -23,6 +26,22 @@ pub struct Pose2 {
     pub y: f64,
     /// Heading in radians, counter-clockwise from the parent's x axis, in (-pi, pi].
     pub heading: f64,
+}
+
+/// A pose as written: read into [`Pose2`] through [`Pose2::new`].
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct PoseFields {
+    x: f64,
+    y: f64,
+    heading: f64,
+}
+
+#[cfg(feature = "serde")]
+impl From<PoseFields> for Pose2 {
+    fn from(p: PoseFields) -> Self {
+        Pose2::new(p.x, p.y, p.heading)
+    }
 }
 
 impl Pose2 {
