@@ -74,7 +74,10 @@ impl PyMapper {
             map: named.map,
             aiding,
             loop_closure: loop_closure.then_some(named.loop_closure),
-            vehicle_from_sensor: mount.map(|m| pose_from(m, "mount")).transpose()?.unwrap_or_default(),
+            vehicle_from_sensor: mount
+                .map(|m| pose_from(m, "mount"))
+                .transpose()?
+                .unwrap_or_default(),
         };
         Ok(PyMapper { mapper: Mapper::new(config).map_err(value_error)? })
     }

@@ -1,7 +1,7 @@
 //! Heading correction (paper eq. 11-13) and the rotation of the position step
 //! (eq. 14), from matches between new lines and map lines.
 
-use pcaline_geometry::{Point2, Vector2};
+use pcaline_geometry::{Point2, Pose2};
 
 /// The smallest `d_rho` used in a weight `1 / d_rho²`: a perfect match
 /// (`d_rho = 0`) would otherwise have an infinite weight.
@@ -54,14 +54,13 @@ pub fn weighted_offset(pairs: impl IntoIterator<Item = (f64, f64)>) -> Option<f6
 /// counter-clockwise frame a heading too small by `dgamma` bends the step by
 /// `-dgamma`, which `R(+dgamma)` undoes.)
 pub fn rotate_step(previous: &Point2<f64>, predicted: &Point2<f64>, dgamma: f64) -> Point2<f64> {
-    let (s, c) = dgamma.sin_cos();
-    let v = predicted - previous;
-    previous + Vector2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+    previous + Pose2 { x: 0.0, y: 0.0, heading: dgamma }.rotate(&(predicted - previous))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pcaline_geometry::Vector2;
 
     #[test]
     fn zero_d_rho_is_guarded() {

@@ -18,9 +18,18 @@ pub fn is_break(
     delta_angle_rad: f64,
     rule: &BreakRule,
 ) -> bool {
-    let dist2 = (points.xy[j] - points.xy[i]).norm_squared();
-    let threshold = rule.threshold_m(points.range_m[i], points.range_m[j], delta_angle_rad);
-    dist2 > threshold * threshold
+    farther_than(
+        points,
+        i,
+        j,
+        rule.threshold_m(points.range_m[i], points.range_m[j], delta_angle_rad),
+    )
+}
+
+/// Whether points `i` and `j` lie farther apart than `threshold_m`.
+#[inline(always)]
+fn farther_than(points: &ScanPoints, i: usize, j: usize, threshold_m: f64) -> bool {
+    (points.xy[j] - points.xy[i]).norm_squared() > threshold_m * threshold_m
 }
 
 /// Splits the points into level-1 clusters.
@@ -223,9 +232,8 @@ impl<'a> CachedRule<'a> {
             self.step = step;
             self.factor = self.rule.angular_factor(step);
         }
-        let dist2 = (points.xy[j] - points.xy[i]).norm_squared();
         let t = self.rule.threshold_with_factor(points.range_m[i], points.range_m[j], self.factor);
-        dist2 > t * t
+        farther_than(points, i, j, t)
     }
 }
 

@@ -89,14 +89,20 @@ impl BreakRule {
         BreakRule::Fixed { dth_m: 0.15 }
     }
 
-    /// The adaptive rule for a UTM-30LX-EW: incidence down to 10°, 3 sigma.
-    pub const fn adaptive_utm30lx() -> Self {
+    /// The adaptive rule for a sensor with range noise `noise`: incidence
+    /// down to 10°, 3 sigma, grazing walls followed.
+    pub const fn adaptive(noise: RangeNoise) -> Self {
         BreakRule::Adaptive {
             lambda_rad: 10.0 * std::f64::consts::PI / 180.0,
             sigma_factor: 3.0,
-            noise: RangeNoise::utm30lx(),
+            noise,
             grazing: true,
         }
+    }
+
+    /// [`BreakRule::adaptive`] for a UTM-30LX-EW's datasheet noise.
+    pub const fn adaptive_utm30lx() -> Self {
+        Self::adaptive(RangeNoise::utm30lx())
     }
 
     /// The threshold in metres between points at ranges `r_i` and `r_j`
@@ -208,12 +214,7 @@ impl SegmentationConfig {
     /// adaptive level-1 threshold and the recursive split at 4 sigma.
     pub const fn noise_aware(noise: RangeNoise) -> Self {
         SegmentationConfig {
-            level1: BreakRule::Adaptive {
-                lambda_rad: 10.0 * std::f64::consts::PI / 180.0,
-                sigma_factor: 3.0,
-                noise,
-                grazing: true,
-            },
+            level1: BreakRule::adaptive(noise),
             min_cluster_points: 5,
             level2: Level2Rule::SplitAtFarthest { sigma_factor: 4.0, min_distance_m: 0.0, noise },
         }
