@@ -204,7 +204,7 @@ impl PyFrame {
     }
 
     /// The fault of each beam: 0 none, 1 displaced, 2 clutter, 3 dropout,
-    /// 4 mixed pixel.
+    /// 4 mixed pixel (255: a kind of fault newer than this package).
     #[getter]
     fn beam_fault<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u8>> {
         PyArray1::from_iter(
@@ -215,6 +215,7 @@ impl PyFrame {
                 Fault::Clutter => 2,
                 Fault::Dropout => 3,
                 Fault::MixedPixel => 4,
+                _ => u8::MAX,
             }),
         )
     }

@@ -3,7 +3,7 @@
 //! some of its fields:
 //!
 //! ```toml
-//! preset = "default"          # paper | default | split-and-merge | ... (PRESETS)
+//! preset = "default"          # paper | default | split-and-merge | ... (Preset)
 //! sensor = "sick-lms"         # optional: utm30lx-ew | sick-lms | urg-04lx | rplidar
 //! [detector.fitting]
 //! eth = 30.0
@@ -31,9 +31,76 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use toml::Value;
 
-/// The presets a configuration may start from.
-pub const PRESETS: [&str; 6] =
-    ["paper", "default", "split-and-merge", "told-sigma", "estimated", "adaptive"];
+/// The presets a configuration may start from: the one registry of their
+/// names and of what each holds ([`Preset::configs`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Preset {
+    /// The paper exactly: its detector, map and heading aiding.
+    Paper,
+    /// The default detector (noise-aware rules at the UTM-30LX-EW datasheet).
+    Default,
+    /// The split-and-merge baseline.
+    SplitAndMerge,
+    /// The default told the range noise (constant).
+    ToldSigma,
+    /// The default estimating the noise from each scan.
+    Estimated,
+    /// Estimation and curved-surface chords refused.
+    Adaptive,
+}
+
+impl Preset {
+    /// Every preset, in the order the evaluation lists them.
+    pub const ALL: [Preset; 6] = [
+        Preset::Paper,
+        Preset::Default,
+        Preset::SplitAndMerge,
+        Preset::ToldSigma,
+        Preset::Estimated,
+        Preset::Adaptive,
+    ];
+
+    /// The name a command line and a configuration file write
+    /// (`split-and-merge`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Paper => "paper",
+            Preset::Default => "default",
+            Preset::SplitAndMerge => "split-and-merge",
+            Preset::ToldSigma => "told-sigma",
+            Preset::Estimated => "estimated",
+            Preset::Adaptive => "adaptive",
+        }
+    }
+
+    /// The preset named `name`, or `None`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The names, comma-separated, for messages.
+    pub fn names() -> String {
+        Self::ALL.map(Preset::name).join(", ")
+    }
+
+    /// The detector and map of the preset; `told-sigma` is told the range
+    /// noise `sigma_m` (constant, at least 1 mm).
+    pub fn configs(self, sigma_m: f64) -> (Config, MapConfig) {
+        let map = MapConfig::default();
+        match self {
+            Preset::Paper => (Config::paper(), MapConfig::paper()),
+            Preset::Default => (Config::default(), map),
+            Preset::SplitAndMerge => (Config::split_and_merge(), map),
+            Preset::ToldSigma => {
+                (Config::noise_aware(RangeNoise::constant(sigma_m.max(1e-3))), map)
+            }
+            Preset::Estimated => {
+                (Config::default().with_noise_estimation(NoiseEstimation::standard()), map)
+            }
+            Preset::Adaptive => (Config::adaptive(), map),
+        }
+    }
+}
 
 /// A detector and map configuration with the name it was given.
 #[derive(Debug, Clone, PartialEq)]
@@ -41,7 +108,7 @@ pub struct NamedConfig {
     /// The preset name or the file's path.
     pub name: String,
     /// The preset it starts from.
-    pub preset: String,
+    pub preset: Preset,
     /// The detector.
     pub detector: Config,
     /// The line map.
@@ -82,7 +149,7 @@ impl NamedConfig {
     /// The heading aiding that goes with the configuration: the paper's
     /// eq. 11-14 for the paper preset, inverse-variance weights otherwise.
     pub fn heading_aiding(&self) -> AidingConfig {
-        if self.preset == "paper" { AidingConfig::paper() } else { AidingConfig::heading() }
+        if self.preset == Preset::Paper { AidingConfig::paper() } else { AidingConfig::heading() }
     }
 }
 
@@ -98,29 +165,14 @@ struct ConfigFile {
     loop_closure: LoopClosureConfig,
 }
 
-/// The preset `name`; `told-sigma` is the default detector told the range
-/// noise `sigma_m` (constant); `estimated` the default estimating the noise
-/// from each scan; `adaptive` that with curved-surface chords refused.
-fn preset(name: &str, sigma_m: f64) -> Option<(Config, MapConfig)> {
-    let map = MapConfig::default();
-    Some(match name {
-        "paper" => (Config::paper(), MapConfig::paper()),
-        "default" => (Config::default(), map),
-        "split-and-merge" => (Config::split_and_merge(), map),
-        "told-sigma" => (Config::noise_aware(RangeNoise::constant(sigma_m.max(1e-3))), map),
-        "estimated" => (Config::default().with_noise_estimation(NoiseEstimation::standard()), map),
-        "adaptive" => (Config::adaptive(), map),
-        _ => return None,
-    })
-}
-
 /// Resolves `spec`: a preset name, or the path of a TOML (`.toml`) or JSON
 /// file. `sigma_m` is the range noise `told-sigma` is told.
 pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
-    if let Some((detector, map)) = preset(spec, sigma_m) {
+    if let Some(preset) = Preset::from_name(spec) {
+        let (detector, map) = preset.configs(sigma_m);
         return Ok(NamedConfig {
             name: spec.to_string(),
-            preset: spec.to_string(),
+            preset,
             detector,
             map,
             aiding: AidingConfig::estimator(),
@@ -132,7 +184,7 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
     if !path.exists() {
         return Err(BadInput(format!(
             "--config {spec}: neither a preset ({}) nor a file",
-            PRESETS.join(", ")
+            Preset::names()
         ))
         .into());
     }
@@ -160,18 +212,19 @@ pub fn parse(path: &Path, text: &str, sigma_m: f64) -> Result<NamedConfig> {
         return Err(BadInput(format!(
             "{}: missing `preset = \"...\"` ({})",
             path.display(),
-            PRESETS.join(", ")
+            Preset::names()
         ))
         .into());
     };
-    let Some((detector, map)) = preset(base_name, sigma_m) else {
+    let Some(preset) = Preset::from_name(base_name) else {
         return Err(BadInput(format!(
             "{}: unknown preset {base_name:?} ({})",
             path.display(),
-            PRESETS.join(", ")
+            Preset::names()
         ))
         .into());
     };
+    let (detector, map) = preset.configs(sigma_m);
     // A sensor named in the file sets the noise every rule starts from;
     // the file's own overrides of those rules still win.
     let sensor = match overrides.get("sensor") {
@@ -198,7 +251,7 @@ pub fn parse(path: &Path, text: &str, sigma_m: f64) -> Result<NamedConfig> {
     let file = merged_file(merged, &overrides, &path.display().to_string())?;
     Ok(NamedConfig {
         name: path.display().to_string(),
-        preset: base_name.to_string(),
+        preset,
         detector: file.detector,
         map: file.map,
         aiding: file.aiding,
@@ -223,7 +276,7 @@ pub fn resolve_with_overrides(
         return Ok(base);
     }
     let merged = Value::try_from(ConfigFile {
-        preset: base.preset.clone(),
+        preset: base.preset.name().into(),
         sensor: base.sensor,
         detector: base.detector,
         map: base.map,
@@ -240,19 +293,13 @@ pub fn resolve_with_overrides(
     })
 }
 
-/// The preset `name` as a configuration file (TOML), every field written.
-pub fn show(name: &str) -> Result<String> {
-    let Some((detector, map)) = preset(name, 0.01) else {
-        return Err(BadInput(format!(
-            "--show-config {name}: not a preset ({})",
-            PRESETS.join(", ")
-        ))
-        .into());
-    };
+/// The preset as a configuration file (TOML), every field written.
+pub fn show(preset: Preset) -> Result<String> {
+    let (detector, map) = preset.configs(0.01);
     let aiding = AidingConfig::estimator();
     let loop_closure = LoopClosureConfig::standard();
     Ok(toml::to_string(&ConfigFile {
-        preset: name.into(),
+        preset: preset.name().into(),
         sensor: None,
         detector,
         map,
@@ -374,6 +421,17 @@ mod tests {
     }
 
     #[test]
+    fn preset_names_are_the_command_lines() {
+        use clap::ValueEnum;
+        for p in Preset::ALL {
+            assert_eq!(Preset::from_name(p.name()), Some(p));
+            assert_eq!(p.to_possible_value().unwrap().get_name(), p.name());
+        }
+        assert_eq!(Preset::value_variants().len(), Preset::ALL.len());
+        assert_eq!(Preset::from_name("Paper"), None);
+    }
+
+    #[test]
     fn errors_name_the_path_the_file_writes() {
         let cases = [
             ("default", "[detector.fitting]\neth = -1", "detector.fitting.eth"),
@@ -442,8 +500,9 @@ mod tests {
 
     #[test]
     fn every_preset_round_trips_through_its_file_form() {
-        for name in PRESETS {
-            let text = show(name).unwrap();
+        for preset in Preset::ALL {
+            let name = preset.name();
+            let text = show(preset).unwrap();
             let path = write(&format!("{name}.toml"), &text);
             let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
             let p = resolve(name, 0.01).unwrap();
@@ -460,7 +519,7 @@ mod tests {
     /// as infinite.
     #[test]
     fn every_preset_round_trips_through_json() {
-        for name in PRESETS {
+        for name in Preset::ALL.map(Preset::name) {
             let p = resolve(name, 0.01).unwrap();
             let file = ConfigFile {
                 preset: name.into(),

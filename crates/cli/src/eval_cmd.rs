@@ -3,7 +3,7 @@
 //! or any configurations side by side, and fit accuracy against the
 //! Cramer-Rao bound; `--real` for the real datasets.
 
-use crate::config_file::{NamedConfig, PRESETS, resolve};
+use crate::config_file::{NamedConfig, Preset, resolve};
 use crate::exit::BadInput;
 use crate::out::{out, outln};
 use anyhow::{Context, Result};
@@ -51,8 +51,8 @@ pub struct EvalArgs {
     #[arg(long = "config")]
     configs: Vec<String>,
     /// Print a preset as a configuration file (every field) and exit.
-    #[arg(long, value_name = "PRESET")]
-    show_config: Option<String>,
+    #[arg(long, value_name = "PRESET", value_enum)]
+    show_config: Option<Preset>,
     /// Add two detection rows for a perfect segmentation (each true wall
     /// fitted on its own points; all, and those known to 2°): the bound of
     /// any detector that fits each wall on its own points.
@@ -213,8 +213,8 @@ fn scenes(files: &[std::path::PathBuf]) -> Result<Vec<Scene>> {
 
 /// Runs `pcaline eval`.
 pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
-    if let Some(name) = &args.show_config {
-        out!("{}", crate::config_file::show(name)?)?;
+    if let Some(preset) = args.show_config {
+        out!("{}", crate::config_file::show(preset)?)?;
         return Ok(());
     }
     if args.real {
@@ -245,7 +245,7 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
         return Err(BadInput("--range-step-mm must be in [0, 1000]".into()).into());
     }
     let specs: Vec<String> = if args.configs.is_empty() {
-        PRESETS.iter().map(|s| s.to_string()).collect()
+        Preset::ALL.iter().map(|p| p.name().to_string()).collect()
     } else {
         args.configs.clone()
     };

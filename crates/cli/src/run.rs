@@ -62,9 +62,36 @@ pub struct RunArgs {
     mcap: Option<PathBuf>,
 }
 
-/// The loops compared: three aiding modes, then the estimator with loop
-/// closure.
-const MODES: [&str; 4] = ["unaided", "heading", "estimator", "estimator + loops"];
+/// The loops compared, in the order of `AidedRun`'s loops and estimates:
+/// three aiding modes, then the estimator with loop closure.
+#[derive(Debug, Clone, Copy)]
+enum Loop {
+    Unaided,
+    Heading,
+    Estimator,
+    EstimatorWithLoops,
+}
+
+impl Loop {
+    const ALL: [Loop; 4] =
+        [Loop::Unaided, Loop::Heading, Loop::Estimator, Loop::EstimatorWithLoops];
+
+    /// The label of the summary's rows.
+    fn label(self) -> &'static str {
+        match self {
+            Loop::Unaided => "unaided",
+            Loop::Heading => "heading",
+            Loop::Estimator => "estimator",
+            Loop::EstimatorWithLoops => "estimator + loops",
+        }
+    }
+
+    /// Its index in `AidedRun::loops` (the aiding modes) and
+    /// `AidedRun::estimates` (all four).
+    fn index(self) -> usize {
+        self as usize
+    }
+}
 
 #[derive(Debug, Serialize)]
 struct ModeSummary {
@@ -134,8 +161,12 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         Simulator::new(&scene, args.seed).map_err(|e| BadInput(format!("{scene_name}: {e}")))?;
     let config = crate::config_file::resolve(&args.config, 0.01)?;
     let mut detector = LineDetector::new(config.detector)?;
-    let aiding_configs =
-        [AidingConfig::none(), config.heading_aiding(), config.aiding_in(AidingMode::Estimator)];
+    // In the order of `Loop`: the three aiding modes; loop closure comes last.
+    let aiding_configs = [Loop::Unaided, Loop::Heading, Loop::Estimator].map(|l| match l {
+        Loop::Unaided => AidingConfig::none(),
+        Loop::Heading => config.heading_aiding(),
+        _ => config.aiding_in(AidingMode::Estimator),
+    });
 
     let bar = progress::bar(sim.len() as u64, "scans", quiet);
     let mut records = Vec::with_capacity(sim.len());
@@ -210,19 +241,20 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     bar.finish_and_clear();
     let estimates = &run.estimates;
     for (k, record) in records.iter_mut().enumerate() {
-        record.heading_aided_pose = pose_array(&estimates[1][k]);
-        record.estimator_pose = pose_array(&estimates[2][k]);
-        record.loop_closure_pose = pose_array(&estimates[3][k]);
+        record.heading_aided_pose = pose_array(&estimates[Loop::Heading.index()][k]);
+        record.estimator_pose = pose_array(&estimates[Loop::Estimator.index()][k]);
+        record.loop_closure_pose = pose_array(&estimates[Loop::EstimatorWithLoops.index()][k]);
     }
     // The map of the default: the estimator with loop closure.
-    let full = run.loop_closing.as_ref().map_or(&run.loops[2], |l| l.aiding());
+    let full =
+        run.loop_closing.as_ref().map_or(&run.loops[Loop::Estimator.index()], |l| l.aiding());
 
     let scores = run.scores(sim.true_poses()).context("the scene has no scans")?;
-    let modes: Vec<ModeSummary> = MODES
+    let modes: Vec<ModeSummary> = Loop::ALL
         .iter()
         .zip(&scores)
         .map(|(mode, AidedScore { errors: e, map: q })| ModeSummary {
-            mode,
+            mode: mode.label(),
             heading_rms_deg: e.heading_rms_rad.to_degrees(),
             heading_max_deg: e.heading_max_rad.to_degrees(),
             position_rms_m: e.position_rms_m,

@@ -22,6 +22,7 @@ pub struct Piece {
 /// When two adjacent pieces are the same line.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub enum MergeRule {
     /// The paper's eq. 7: the two directions differ by less than `alpha_t_rad`
     /// and both lie within `alpha_t_rad` of the segment joining the centroids

@@ -9,6 +9,7 @@ use std::path::Path;
 
 /// The formats `pcaline` reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum LogFormat {
     /// CARMEN text log.
     Carmen,

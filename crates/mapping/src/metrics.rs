@@ -6,6 +6,7 @@ use pcaline_geometry::{LineSegment, Point2, line_angle_diff};
 /// Which centroid term `d_C` enters `d_rho`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub enum CentroidTerm {
     /// Eq. 10: the distance between the two centroids. A long map line's
     /// centroid is far from a new observation of one of its ends, so long

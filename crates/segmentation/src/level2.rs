@@ -8,6 +8,7 @@ use std::ops::Range;
 /// Which values of the derivatives the peak rule compares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub enum DerivativeSign {
     /// As printed in eq. 2a/2b: the signed derivative against its signed mean
     /// plus standard deviation (peaks of decreasing coordinates are never found).

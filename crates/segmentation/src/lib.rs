@@ -50,6 +50,7 @@ use pcaline_geometry::ConfigError;
 /// The level-1 break-point threshold between consecutive points.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub enum BreakRule {
     /// The paper's fixed threshold `DTh` in metres (0.15 m for the UTM-30LX-EW:
     /// the largest spacing at 30 m and 0.25° is 13.1 cm).
@@ -167,6 +168,7 @@ impl BreakRule {
 /// How a level-1 cluster is split into sub-clusters (level 2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub enum Level2Rule {
     /// The paper's derivative peaks (eq. 2a/2b).
     DerivativePeaks {

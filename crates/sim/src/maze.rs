@@ -8,6 +8,7 @@ use rand::RngExt;
 
 /// How walls are drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum WallStyle {
     /// Each wall is one segment (a thin panel seen from both sides).
     Single,

@@ -88,6 +88,7 @@ impl Default for SensorSpec {
 
 /// The base sensor models.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum SensorKind {
     /// [`SensorModel::utm30lx_ew`].
     #[serde(rename = "utm30lx-ew")]

@@ -9,6 +9,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 /// What happened to a beam besides range noise.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Fault {
     /// A clean return (plus Gaussian noise) or no return because nothing was hit.
     None,
