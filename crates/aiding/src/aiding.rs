@@ -398,9 +398,8 @@ impl Aiding {
             report.fallback = Some(Fallback::NonFiniteCorrection);
         }
         if insert {
-            let viewpoint = Point2::new(pose.x, pose.y);
-            for (l, m) in self.world_lines(&pose, lines) {
-                self.map.insert_seen_from(&l, &m, Some(&viewpoint));
+            for l in lines {
+                self.map.insert_observed(&pose, &l.line, &l.moments);
             }
         }
         self.last_motion = previous.map(|p| p.between(&pose));

@@ -733,11 +733,8 @@ impl LoopClosing {
         };
         for (k, node) in self.keyframes.iter().zip(&self.graph.nodes) {
             map.begin_scan();
-            let viewpoint = Point2::new(node.x, node.y);
             for l in &k.lines {
-                let line = l.line.transformed(node);
-                let moments = l.moments.transformed(node);
-                map.insert_seen_from(&line, &moments, Some(&viewpoint));
+                map.insert_observed(node, &l.line, &l.moments);
             }
         }
         map

@@ -67,7 +67,7 @@ pub struct MapConfig {
     /// A map line remembers the side it was seen from, and a line seen from
     /// the other side does not match it: the two faces of a thin wall stay
     /// two map lines instead of pulling the pose across the wall. Needs the
-    /// viewpoint ([`LineMap::insert_seen_from`]); off in the paper (and in
+    /// viewpoint ([`LineMap::insert_observed`]); off in the paper (and in
     /// map files written before the option existed).
     #[cfg_attr(feature = "serde", serde(default))]
     pub sided: bool,

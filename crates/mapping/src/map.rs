@@ -5,7 +5,7 @@
 use crate::grid::Grid;
 use crate::{LineDistance, LineStatus, MapConfig, MergeGate, line_distance};
 use pcaline_fitting::{Moments, line_from_moments};
-use pcaline_geometry::{ConfigError, LineSegment, Point2, Vector2};
+use pcaline_geometry::{ConfigError, LineSegment, Point2, Pose2, Vector2};
 use std::collections::{HashMap, VecDeque};
 
 /// A stable identifier of a map line.
@@ -415,11 +415,38 @@ impl LineMap {
         });
     }
 
-    /// Adds a detected line (world frame, with the moments of its points in
-    /// the world frame): merged into the map line it matches, or added as a
-    /// new map line. Returns the map line's id and the match, if any.
-    /// Non-finite lines, and unmatched lines too uncertain to start a map line
-    /// (see [`MapConfig::max_new_alpha_std_rad`]), are not added (`None`).
+    /// Adds a line observed by a sensor at `world_from_sensor`: `line` and
+    /// the `moments` of its points are in the sensor's frame, as a detector
+    /// gives them. Both are placed in the world here, and the sensor's
+    /// position is the viewpoint (a new map line remembers the side it was
+    /// seen from; with [`MapConfig::sided`] only lines seen from the same
+    /// side merge into it). The line is merged into the map line it
+    /// matches, or added as a new one; returns the map line's id and the
+    /// match, if any. Non-finite lines, and unmatched lines too uncertain to
+    /// start a map line ([`MapConfig::max_new_alpha_std_rad`]), are not
+    /// added (`None`).
+    ///
+    /// This is the insertion path of the paper's mapping (section 2.1);
+    /// [`LineMap::insert`] takes lines already in the world frame.
+    pub fn insert_observed(
+        &mut self,
+        world_from_sensor: &Pose2,
+        line: &LineSegment,
+        moments: &Moments,
+    ) -> Option<(LineId, Option<Match>)> {
+        let viewpoint = Point2::new(world_from_sensor.x, world_from_sensor.y);
+        self.insert_seen_from(
+            &line.transformed(world_from_sensor),
+            &moments.transformed(world_from_sensor),
+            Some(&viewpoint),
+        )
+    }
+
+    /// Adds a line that is already in the world frame, with the moments of
+    /// its points in the world frame (a map built from another source, a
+    /// test). It has no viewpoint, so [`MapConfig::sided`] cannot apply to
+    /// it: it may merge with a line seen from the other side of a thin wall.
+    /// Lines from a sensor go through [`LineMap::insert_observed`].
     pub fn insert(
         &mut self,
         line: &LineSegment,
@@ -428,11 +455,9 @@ impl LineMap {
         self.insert_seen_from(line, moments, None)
     }
 
-    /// As [`LineMap::insert`], for a line seen from `viewpoint` (the sensor
-    /// position, world frame): a new map line remembers the side it was seen
-    /// from, and with [`MapConfig::sided`] only lines seen from the same side
-    /// merge into it.
-    pub fn insert_seen_from(
+    /// The one insertion: `line` and `moments` in the world frame, seen from
+    /// `viewpoint` when known.
+    fn insert_seen_from(
         &mut self,
         line: &LineSegment,
         moments: &Moments,
@@ -757,6 +782,33 @@ mod tests {
         assert!(map.insert(&a, &ma).is_none());
         assert!(map.find_match(&a).is_none());
         assert!(map.is_empty());
+    }
+
+    #[test]
+    fn an_observation_is_placed_in_the_world_with_its_moments() {
+        // The wall x = 3 (world), 0 <= y <= 1, seen from two sensor poses.
+        let (world_wall, world_moments) = wall(3.0, 0.0, 1.0);
+        let mut observed = LineMap::new(MapConfig::default()).unwrap();
+        let mut by_hand = LineMap::new(MapConfig::default()).unwrap();
+        for world_from_sensor in [Pose2::new(1.0, 0.5, 0.3), Pose2::new(0.5, -0.2, -0.4)] {
+            let sensor_from_world = world_from_sensor.inverse();
+            let line = world_wall.transformed(&sensor_from_world);
+            let moments = world_moments.transformed(&sensor_from_world);
+            observed.insert_observed(&world_from_sensor, &line, &moments).unwrap();
+            let viewpoint = Point2::new(world_from_sensor.x, world_from_sensor.y);
+            by_hand.insert_seen_from(
+                &line.transformed(&world_from_sensor),
+                &moments.transformed(&world_from_sensor),
+                Some(&viewpoint),
+            );
+        }
+        assert_eq!(observed.lines(), by_hand.lines());
+        assert_eq!(observed.len(), 1);
+        let m = &observed.lines()[0];
+        assert!((m.line.d - 3.0).abs() < 1e-9 && m.line.alpha.abs() < 1e-9, "{:?}", m.line);
+        assert!((m.moments.mean - world_moments.mean).norm() < 1e-9);
+        // Seen from x < 3: the side is remembered.
+        assert!(m.facing.is_some());
     }
 
     #[test]
