@@ -26,7 +26,7 @@ use pcaline::aiding::{AidingConfig, AidingMode, LoopClosureConfig};
 use pcaline::geometry::SensorProfile;
 use pcaline::mapping::MapConfig;
 use pcaline::segmentation::NoiseEstimation;
-use pcaline::{Config, RangeNoise};
+use pcaline::{Config, ConfigError, Pose2, RangeNoise};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use toml::Value;
@@ -121,6 +121,10 @@ pub struct NamedConfig {
     /// The sensor the file names (`sensor = "sick-lms"`): its datasheet
     /// noise is already in `detector`.
     pub sensor: Option<SensorProfile>,
+    /// Where the LIDAR sits on the vehicle whose poses a log gives
+    /// (`[vehicle_from_sensor]` in a file; `pcaline map --mount` overrides
+    /// it); the identity for the presets.
+    pub vehicle_from_sensor: Pose2,
 }
 
 impl NamedConfig {
@@ -163,6 +167,10 @@ struct ConfigFile {
     map: MapConfig,
     aiding: AidingConfig,
     loop_closure: LoopClosureConfig,
+    /// Where the LIDAR sits on the vehicle (`x`, `y` metres, `heading`
+    /// radians); the identity when the file leaves it out.
+    #[serde(default)]
+    vehicle_from_sensor: Pose2,
 }
 
 /// Resolves `spec`: a preset name, or the path of a TOML (`.toml`) or JSON
@@ -178,6 +186,7 @@ pub fn resolve(spec: &str, sigma_m: f64) -> Result<NamedConfig> {
             aiding: AidingConfig::estimator(),
             loop_closure: LoopClosureConfig::standard(),
             sensor: None,
+            vehicle_from_sensor: Pose2::identity(),
         });
     }
     let path = Path::new(spec);
@@ -247,6 +256,7 @@ pub fn parse(path: &Path, text: &str, sigma_m: f64) -> Result<NamedConfig> {
         map,
         aiding,
         loop_closure,
+        vehicle_from_sensor: Pose2::identity(),
     })?;
     let file = merged_file(merged, &overrides, &path.display().to_string())?;
     Ok(NamedConfig {
@@ -257,6 +267,7 @@ pub fn parse(path: &Path, text: &str, sigma_m: f64) -> Result<NamedConfig> {
         aiding: file.aiding,
         loop_closure: file.loop_closure,
         sensor: file.sensor,
+        vehicle_from_sensor: file.vehicle_from_sensor,
     })
 }
 
@@ -282,6 +293,7 @@ pub fn resolve_with_overrides(
         map: base.map,
         aiding: base.aiding,
         loop_closure: base.loop_closure,
+        vehicle_from_sensor: base.vehicle_from_sensor,
     })?;
     let file = merged_file(merged, overrides, label)?;
     Ok(NamedConfig {
@@ -289,6 +301,7 @@ pub fn resolve_with_overrides(
         map: file.map,
         aiding: file.aiding,
         loop_closure: file.loop_closure,
+        vehicle_from_sensor: file.vehicle_from_sensor,
         ..base
     })
 }
@@ -305,6 +318,7 @@ pub fn show(preset: Preset) -> Result<String> {
         map,
         aiding,
         loop_closure,
+        vehicle_from_sensor: Pose2::identity(),
     })?)
 }
 
@@ -320,6 +334,18 @@ fn merged_file(mut base: Value, overrides: &Value, label: &str) -> Result<Config
         .and_then(|()| file.map.validate())
         .and_then(|()| file.aiding.validate())
         .and_then(|()| file.loop_closure.validate())
+        .and_then(|()| {
+            let m = file.vehicle_from_sensor;
+            [("x", m.x), ("y", m.y), ("heading", m.heading)].into_iter().try_for_each(|(n, v)| {
+                ConfigError::check_field(
+                    v.is_finite(),
+                    "vehicle_from_sensor",
+                    n,
+                    v,
+                    "must be finite",
+                )
+            })
+        })
         .map_err(|e| BadInput(format!("{label}: {e}")))?;
     Ok(file)
 }
@@ -418,6 +444,20 @@ mod tests {
                 .unwrap_err()
                 .to_string();
         assert!(e.contains("eth"), "{e}");
+    }
+
+    #[test]
+    fn a_file_sets_the_sensor_mount() {
+        let file = write(
+            "mount.toml",
+            "preset = \"default\"\n[vehicle_from_sensor]\nx = 0.25\ny = 0.0\nheading = 3.0\n",
+        );
+        let c = resolve(file.to_str().unwrap(), 0.01).unwrap();
+        assert_eq!(c.vehicle_from_sensor, Pose2::new(0.25, 0.0, 3.0));
+        assert_eq!(resolve("default", 0.01).unwrap().vehicle_from_sensor, Pose2::identity());
+        let bad = write("bad-mount.toml", "preset = \"default\"\n[vehicle_from_sensor]\ny = nan\n");
+        let e = resolve(bad.to_str().unwrap(), 0.01).unwrap_err().to_string();
+        assert!(e.contains("bad-mount.toml") && e.contains("`vehicle_from_sensor.y`"), "{e}");
     }
 
     #[test]
@@ -528,10 +568,12 @@ mod tests {
                 map: p.map,
                 aiding: p.aiding,
                 loop_closure: p.loop_closure,
+                vehicle_from_sensor: Pose2::new(0.25, -0.1, 3.0),
             };
             let json = serde_json::to_string(&file).unwrap();
             let back: ConfigFile =
                 serde_json::from_str(&json).unwrap_or_else(|e| panic!("{name}: {e}\n{json}"));
+            assert_eq!(back.vehicle_from_sensor, file.vehicle_from_sensor);
             assert_eq!(
                 (back.sensor, back.detector, back.map, back.aiding, back.loop_closure),
                 (file.sensor, file.detector, file.map, file.aiding, file.loop_closure),

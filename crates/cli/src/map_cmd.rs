@@ -68,8 +68,9 @@ pub struct MapArgs {
     /// Where the LIDAR sits on the vehicle whose poses the log gives:
     /// `X_M,Y_M,YAW_DEG` (forward, left, counter-clockwise). The trajectory
     /// is written for the vehicle; the map, the scans and Foxglove's poses
-    /// are placed with the sensor's. Default: the log's poses are the
-    /// sensor's.
+    /// are placed with the sensor's. Default: the configuration's
+    /// `[vehicle_from_sensor]`, which the presets leave at the identity (the
+    /// log's poses are the sensor's).
     #[arg(long, value_name = "X_M,Y_M,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
     mount: Option<Pose2>,
     /// Output folder.
@@ -131,7 +132,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
     let sensor = args.input.sensor(&args.log, config.sensor)?;
-    let mount = args.mount.unwrap_or_default();
+    let mount = args.mount.unwrap_or(config.vehicle_from_sensor);
     let mut mapper = Mapper::new(MapperConfig {
         detector: config.detector_for(sensor),
         map: config.map,
