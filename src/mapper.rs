@@ -3,7 +3,7 @@
 
 use crate::{Config, DetectedLine, LineDetector};
 use pcaline_aiding::{
-    AidingConfig, Localizer, LoopClosing, LoopClosureConfig, OptimizeReport, SensorLine, StepReport,
+    AidingConfig, Localizer, LoopClosing, LoopClosureConfig, OptimizeReport, StepReport,
 };
 use pcaline_geometry::{ConfigError, Pose2, Scan};
 use pcaline_mapping::{LineMap, MapConfig};
@@ -96,9 +96,8 @@ pub struct Mapper {
     localizer: Localizer,
     vehicle_from_sensor: Pose2,
     sensor_from_vehicle: Pose2,
-    /// The last scan's lines, as detected and as the localizer takes them.
+    /// The last scan's lines (the localizer takes them as they are).
     detected: Vec<DetectedLine>,
-    lines: Vec<SensorLine>,
     /// The last stamped source pose (for the deskew velocity).
     last_source: Option<(f64, Pose2)>,
 }
@@ -122,7 +121,6 @@ impl Mapper {
             vehicle_from_sensor: mount,
             sensor_from_vehicle: mount.inverse(),
             detected: Vec::new(),
-            lines: Vec::new(),
             last_source: None,
         })
     }
@@ -140,7 +138,7 @@ impl Mapper {
         };
         self.last_source = scan.stamp_s.map(|t| (t, source));
         self.detect(scan, velocity);
-        let (pose, report) = self.localizer.step_with(scan.stamp_s, &source, &self.lines);
+        let (pose, report) = self.localizer.step_with(scan.stamp_s, &source, &self.detected);
         self.step(pose, report)
     }
 
@@ -150,7 +148,7 @@ impl Mapper {
     pub fn process_without_source(&mut self, scan: &Scan) -> MapperStep {
         self.last_source = None;
         self.detect(scan, self.localizer.velocity());
-        let (pose, report) = self.localizer.step_without_source(scan.stamp_s, &self.lines);
+        let (pose, report) = self.localizer.step_without_source(scan.stamp_s, &self.detected);
         self.step(pose, report)
     }
 
@@ -159,7 +157,7 @@ impl Mapper {
         MapperStep {
             pose: world_from_sensor.compose(&self.sensor_from_vehicle),
             world_from_sensor,
-            lines: self.lines.len(),
+            lines: self.detected.len(),
             report,
         }
     }
@@ -170,8 +168,6 @@ impl Mapper {
         let detection = self.detector.detect_moving(scan, velocity.as_ref());
         self.detected.clear();
         self.detected.extend_from_slice(detection.lines);
-        self.lines.clear();
-        self.lines.extend(detection.lines.iter().map(SensorLine::from));
     }
 
     /// The lines detected in the last processed scan, sensor frame (empty

@@ -25,6 +25,35 @@ pub struct SensorLine {
     pub moments: Moments,
 }
 
+/// A line seen by the sensor with the moments of its points, both in the
+/// sensor frame: what the aiding takes. [`SensorLine`] is the plain pair; a
+/// detector's [`DetectedLine`](pcaline_fitting::DetectedLine) is one as it
+/// comes, so detections go in without a conversion.
+pub trait ObservedLine {
+    /// The line, sensor frame.
+    fn line(&self) -> &LineSegment;
+    /// Moments of its points, sensor frame.
+    fn moments(&self) -> &Moments;
+}
+
+impl ObservedLine for SensorLine {
+    fn line(&self) -> &LineSegment {
+        &self.line
+    }
+    fn moments(&self) -> &Moments {
+        &self.moments
+    }
+}
+
+impl ObservedLine for pcaline_fitting::DetectedLine {
+    fn line(&self) -> &LineSegment {
+        &self.line
+    }
+    fn moments(&self) -> &Moments {
+        &self.moments
+    }
+}
+
 impl From<&pcaline_fitting::DetectedLine> for SensorLine {
     /// The line and its moments, as the aiding takes them.
     fn from(l: &pcaline_fitting::DetectedLine) -> Self {
@@ -203,13 +232,21 @@ impl Aiding {
     /// (`world_from_sensor` as the localization source sees it). The source's
     /// motion since its previous pose is composed onto the corrected pose;
     /// the first pose is taken as it is.
-    pub fn step(&mut self, source_pose: &Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
+    pub fn step(
+        &mut self,
+        source_pose: &Pose2,
+        lines: &[impl ObservedLine],
+    ) -> (Pose2, StepReport) {
         self.last_dt_s = None;
         self.step_source(source_pose, lines)
     }
 
     /// [`Aiding::step`] with the step's duration already recorded.
-    fn step_source(&mut self, source_pose: &Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
+    fn step_source(
+        &mut self,
+        source_pose: &Pose2,
+        lines: &[impl ObservedLine],
+    ) -> (Pose2, StepReport) {
         if !source_pose.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
         }
@@ -228,7 +265,7 @@ impl Aiding {
         &mut self,
         stamp_s: f64,
         source_pose: &Pose2,
-        lines: &[SensorLine],
+        lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
         if self.stamp_went_backwards(stamp_s) {
             // The source's pose is reported with the last correction, and
@@ -250,7 +287,7 @@ impl Aiding {
     pub fn step_without_source(
         &mut self,
         stamp_s: Option<f64>,
-        lines: &[SensorLine],
+        lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
         if stamp_s.is_some_and(|t| self.stamp_went_backwards(t)) {
             return self.fall_back(Fallback::StampBackwards);
@@ -292,7 +329,7 @@ impl Aiding {
     pub fn step_increment(
         &mut self,
         increment: &Pose2,
-        lines: &[SensorLine],
+        lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
         if !increment.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
@@ -360,8 +397,12 @@ impl Aiding {
         )
     }
 
-    fn world_lines(&self, pose: &Pose2, lines: &[SensorLine]) -> Vec<(LineSegment, Moments)> {
-        lines.iter().map(|l| (l.line.transformed(pose), l.moments.transformed(pose))).collect()
+    fn world_lines(
+        &self,
+        pose: &Pose2,
+        lines: &[impl ObservedLine],
+    ) -> Vec<(LineSegment, Moments)> {
+        lines.iter().map(|l| (l.line().transformed(pose), l.moments().transformed(pose))).collect()
     }
 
     /// Corrects the prediction with the mode's rule, then updates the map.
@@ -371,7 +412,7 @@ impl Aiding {
         predicted_cov: Matrix3<f64>,
         prediction: Prediction,
         fallback: Option<Fallback>,
-        lines: &[SensorLine],
+        lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
         self.map.begin_scan();
         self.associations.clear();
@@ -399,7 +440,7 @@ impl Aiding {
         }
         if insert {
             for l in lines {
-                self.map.insert_observed(&pose, &l.line, &l.moments);
+                self.map.insert_observed(&pose, l.line(), l.moments());
             }
         }
         self.last_motion = previous.map(|p| p.between(&pose));
@@ -432,7 +473,7 @@ impl Aiding {
         &mut self,
         predicted: Pose2,
         predicted_cov: Matrix3<f64>,
-        lines: &[SensorLine],
+        lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport, bool) {
         let mut report = StepReport::default();
         self.covariance = predicted_cov;
@@ -471,7 +512,7 @@ impl Aiding {
                     unconfirmed = true;
                     return;
                 }
-                let mut meas = measure(&sensor.line, map_line, &predicted, &e.measurement);
+                let mut meas = measure(sensor.line(), map_line, &predicted, &e.measurement);
                 meas.covariance *= r_scale;
                 if tentative {
                     meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
@@ -515,7 +556,7 @@ impl Aiding {
             return (predicted, report, true);
         }
         // Joint consistency, hypotheses from the matches with the most points first.
-        gated.sort_by_key(|(i, _, _)| std::cmp::Reverse(lines[*i].line.n_points));
+        gated.sort_by_key(|(i, _, _)| std::cmp::Reverse(lines[*i].line().n_points));
         let measurements: Vec<LineMeasurement> = gated.iter().map(|g| g.2).collect();
         let flags = joint_consistent(&measurements, &predicted_cov, e.consensus_chi2, 12);
         let consistent: Vec<(usize, usize)> =
@@ -536,7 +577,7 @@ impl Aiding {
                 .iter()
                 .map(|&(i, j)| {
                     let map_line = &map.lines()[j];
-                    let mut meas = measure(&lines[i].line, map_line, pose, &e.measurement);
+                    let mut meas = measure(lines[i].line(), map_line, pose, &e.measurement);
                     meas.covariance *= r_scale;
                     if map_line.status == LineStatus::Tentative {
                         meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
@@ -569,8 +610,10 @@ impl Aiding {
             return (predicted, report, false);
         }
         report.matches = consistent.len();
-        self.last_consistent =
-            consistent.iter().map(|&(i, j)| (lines[i].line, self.map.lines()[j].clone())).collect();
+        self.last_consistent = consistent
+            .iter()
+            .map(|&(i, j)| (*lines[i].line(), self.map.lines()[j].clone()))
+            .collect();
         report.heading_correction_rad =
             pcaline_geometry::wrap_angle(update.pose.heading - predicted.heading);
         if let Some(c) = e.calibration {
@@ -639,7 +682,11 @@ impl Aiding {
 
     /// The paper's heading aiding and the full-pose variant: each scan's
     /// correction applied in full.
-    fn correct_in_full(&mut self, predicted: Pose2, lines: &[SensorLine]) -> (Pose2, StepReport) {
+    fn correct_in_full(
+        &mut self,
+        predicted: Pose2,
+        lines: &[impl ObservedLine],
+    ) -> (Pose2, StepReport) {
         let mut report = StepReport::default();
         let mut pose = predicted;
         let previous = self.corrected;
@@ -828,7 +875,7 @@ mod tests {
         let (pose, report) = a.step(&Pose2::new(0.1, 0.0, 0.0), &far);
         assert_eq!(report.fallback, Some(Fallback::NoMatches));
         assert_eq!(pose, Pose2::new(0.1, 0.0, 0.0));
-        let (pose, report) = a.step(&Pose2::new(0.2, 0.0, 0.0), &[]);
+        let (pose, report) = a.step(&Pose2::new(0.2, 0.0, 0.0), &[] as &[SensorLine]);
         assert_eq!(report.fallback, Some(Fallback::NoMatches));
         assert!(pose.is_finite());
     }

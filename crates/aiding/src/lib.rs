@@ -41,7 +41,7 @@ mod pose_window;
 mod source_calibration;
 mod translation;
 
-pub use aiding::{Aiding, Association, MatchOutcome, SensorLine};
+pub use aiding::{Aiding, Association, MatchOutcome, ObservedLine, SensorLine};
 
 pub use heading::{MIN_D_RHO_M, heading_correction, rotate_step, weighted_offset};
 pub use line_alignment::{

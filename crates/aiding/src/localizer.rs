@@ -2,7 +2,7 @@
 //! set of steps, for callers that offer both (the facade's `Mapper`,
 //! `pcaline map`, `pcaline eval --real`).
 
-use crate::{Aiding, AidingConfig, LoopClosing, LoopClosureConfig, SensorLine, StepReport};
+use crate::{Aiding, AidingConfig, LoopClosing, LoopClosureConfig, ObservedLine, StepReport};
 use pcaline_geometry::{ConfigError, Pose2};
 use pcaline_mapping::{LineMap, MapConfig};
 
@@ -74,7 +74,7 @@ impl Localizer {
         &mut self,
         stamp_s: Option<f64>,
         source: &Pose2,
-        lines: &[SensorLine],
+        lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
         match (self, stamp_s) {
             (Localizer::Plain(a), Some(t)) => a.step_at(t, source, lines),
@@ -94,7 +94,7 @@ impl Localizer {
     pub fn step_without_source(
         &mut self,
         stamp_s: Option<f64>,
-        lines: &[SensorLine],
+        lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
         match self {
             Localizer::Plain(a) => a.step_without_source(stamp_s, lines),

@@ -31,8 +31,9 @@
 //! thread's budget).
 
 use crate::{
-    Aiding, AidingConfig, Alignment, AlignmentConfig, AlignmentPrior, EdgeKind, OptimizeReport,
-    OptimizerConfig, PoseGraph, SensorLine, StepReport, align_lines, see_through_fraction,
+    Aiding, AidingConfig, Alignment, AlignmentConfig, AlignmentPrior, EdgeKind, ObservedLine,
+    OptimizeReport, OptimizerConfig, PoseGraph, SensorLine, StepReport, align_lines,
+    see_through_fraction,
 };
 
 /// A sample closer than this to a crossing wall is not seeing through it
@@ -391,19 +392,28 @@ impl LoopClosing {
     }
 
     /// One scan with the source's pose, stamped ([`Aiding::step_at`]).
-    pub fn step_at(&mut self, stamp_s: f64, source: &Pose2, lines: &[SensorLine]) -> LoopStep {
+    pub fn step_at(
+        &mut self,
+        stamp_s: f64,
+        source: &Pose2,
+        lines: &[impl ObservedLine],
+    ) -> LoopStep {
         let (pose, report) = self.aiding.step_at(stamp_s, source, lines);
         self.after_step(pose, report, Some(stamp_s), lines)
     }
 
     /// One scan with the source's pose, unstamped ([`Aiding::step`]).
-    pub fn step(&mut self, source: &Pose2, lines: &[SensorLine]) -> LoopStep {
+    pub fn step(&mut self, source: &Pose2, lines: &[impl ObservedLine]) -> LoopStep {
         let (pose, report) = self.aiding.step(source, lines);
         self.after_step(pose, report, None, lines)
     }
 
     /// One scan without a source ([`Aiding::step_without_source`]).
-    pub fn step_without_source(&mut self, stamp_s: Option<f64>, lines: &[SensorLine]) -> LoopStep {
+    pub fn step_without_source(
+        &mut self,
+        stamp_s: Option<f64>,
+        lines: &[impl ObservedLine],
+    ) -> LoopStep {
         let (pose, report) = self.aiding.step_without_source(stamp_s, lines);
         self.after_step(pose, report, stamp_s, lines)
     }
@@ -469,7 +479,7 @@ impl LoopClosing {
         pose: Pose2,
         report: StepReport,
         stamp_s: Option<f64>,
-        lines: &[SensorLine],
+        lines: &[impl ObservedLine],
     ) -> LoopStep {
         let scan = self.scans.len();
         let mut step = LoopStep { pose, report, keyframe: None, loops_added: 0, optimized: None };
@@ -513,7 +523,10 @@ impl LoopClosing {
             path_m,
             chain_heading_var,
             chain_position_var,
-            lines: lines.to_vec(),
+            lines: lines
+                .iter()
+                .map(|l| SensorLine { line: *l.line(), moments: *l.moments() })
+                .collect(),
         });
         self.scans.push(Some((node, Pose2::identity())));
         step.keyframe = Some(node);

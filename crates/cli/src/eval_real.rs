@@ -314,7 +314,6 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
 struct Loops {
     detector: LineDetector,
     loops: Vec<Localizer>,
-    lines: Vec<SensorLine>,
 }
 
 impl Loops {
@@ -322,15 +321,13 @@ impl Loops {
         Ok(Loops {
             detector: LineDetector::new(config.detector)?,
             loops: runners(config)?,
-            lines: Vec::new(),
         })
     }
 
     /// The pose of each mode after the scan `scan` with source pose `source`.
     fn step(&mut self, scan: &pcaline::Scan, source: &Pose2) -> Vec<Pose2> {
-        self.lines.clear();
-        self.lines.extend(self.detector.detect(scan).lines.iter().map(SensorLine::from));
-        let lines = &self.lines;
+        // The localizers take the detector's lines as they are.
+        let lines = self.detector.detect(scan).lines;
         self.loops.iter_mut().map(|a| a.step_with(scan.stamp_s, source, lines).0).collect()
     }
 
