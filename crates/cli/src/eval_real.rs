@@ -318,10 +318,7 @@ struct Loops {
 
 impl Loops {
     fn new(config: &NamedConfig) -> Result<Self> {
-        Ok(Loops {
-            detector: LineDetector::new(config.detector)?,
-            loops: runners(config)?,
-        })
+        Ok(Loops { detector: LineDetector::new(config.detector)?, loops: runners(config)? })
     }
 
     /// The pose of each mode after the scan `scan` with source pose `source`.

@@ -113,100 +113,205 @@ impl MazeConfig {
 /// and doorways. The same config and seed give the same scene.
 pub fn generate_maze(config: &MazeConfig, seed: u64) -> Result<Scene, ConfigError> {
     config.validate()?;
-    let (cols, rows, cell) = (config.cols, config.rows, config.cell_m);
     let mut rng = stream_rng(seed, Stream::Maze, 0);
-    let idx = |c: usize, r: usize| r * cols + c;
-    // open_right[i]: wall between cell i and its +x neighbour is open; open_up likewise +y.
-    let mut open_right = vec![false; cols * rows];
-    let mut open_up = vec![false; cols * rows];
-    let mut tree: Vec<Vec<usize>> = vec![Vec::new(); cols * rows];
+    // The random draws happen in this order: the tree, the loops and rooms,
+    // the clutter (the same seed keeps giving the same maze).
+    let mut grid = Openings::spanning_tree(config.cols, config.rows, &mut rng);
+    grid.open_loops_and_rooms(config, &mut rng);
+    let walls = grid.wall_shapes(config);
+    let obstacles = clutter(config, &mut rng);
+    let waypoints = grid.tour(config);
+    let (cols, rows, cell) = (config.cols, config.rows, config.cell_m);
+    let start = grid.centre(0, cell);
+    Ok(Scene {
+        name: config.name.clone(),
+        description: format!(
+            "Generated maze: {cols} x {rows} cells of {cell} m, seed {seed}, {} walls, {} boxes",
+            walls.len(),
+            obstacles.len()
+        ),
+        sensor: SensorSpec::default(),
+        walls,
+        obstacles,
+        trajectory: TrajectorySpec {
+            start: StartPose { x: start[0], y: start[1], heading_deg: 0.0 },
+            waypoints,
+            speed_m_s: config.speed_m_s,
+            yaw_rate_deg_s: 90.0,
+            laps: 1,
+            scan_rate_hz: None,
+        },
+        odometry: OdometrySpec::default(),
+    })
+}
 
-    // Depth-first spanning tree.
-    let mut visited = vec![false; cols * rows];
-    let mut stack = vec![0usize];
-    visited[0] = true;
-    while let Some(&cur) = stack.last() {
-        let (c, r) = (cur % cols, cur / cols);
-        let mut next = Vec::with_capacity(4);
-        if c + 1 < cols && !visited[idx(c + 1, r)] {
-            next.push(idx(c + 1, r));
-        }
-        if c > 0 && !visited[idx(c - 1, r)] {
-            next.push(idx(c - 1, r));
-        }
-        if r + 1 < rows && !visited[idx(c, r + 1)] {
-            next.push(idx(c, r + 1));
-        }
-        if r > 0 && !visited[idx(c, r - 1)] {
-            next.push(idx(c, r - 1));
-        }
-        if next.is_empty() {
-            stack.pop();
-            continue;
-        }
-        let n = next[rng.random_range(0..next.len())];
-        open_between(cur, n, cols, &mut open_right, &mut open_up);
-        tree[cur].push(n);
-        tree[n].push(cur);
-        visited[n] = true;
-        stack.push(n);
-    }
-    // Loops and rooms.
-    for r in 0..rows {
-        for c in 0..cols {
-            let i = idx(c, r);
-            let room = rng.random_bool(config.room_probability);
-            if c + 1 < cols && (room || rng.random_bool(config.loop_probability)) {
-                open_right[i] = true;
-            }
-            if r + 1 < rows && (room || rng.random_bool(config.loop_probability)) {
-                open_up[i] = true;
-            }
-        }
+/// Which walls of the cell grid are open, and the spanning tree's edges.
+struct Openings {
+    cols: usize,
+    rows: usize,
+    /// `open_right[i]`: the wall between cell `i` and its +x neighbour is open.
+    open_right: Vec<bool>,
+    /// `open_up[i]`: the wall between cell `i` and its +y neighbour is open.
+    open_up: Vec<bool>,
+    /// Each cell's neighbours in the spanning tree.
+    tree: Vec<Vec<usize>>,
+}
+
+impl Openings {
+    fn idx(&self, c: usize, r: usize) -> usize {
+        r * self.cols + c
     }
 
-    // Walls as maximal runs along each grid line, with doorway gaps.
-    let mut runs: Vec<([f64; 2], [f64; 2])> = Vec::new();
-    let door = config.doorway_m;
-    // Vertical grid lines x = k * cell.
-    for k in 0..=cols {
-        let solid = |r: usize| k == 0 || k == cols || !open_right[idx(k - 1, r)];
-        line_runs(rows, cell, door, solid, |a, b| {
-            runs.push(([k as f64 * cell, a], [k as f64 * cell, b]))
-        });
+    /// A depth-first spanning tree of the grid, its edges opened.
+    fn spanning_tree(cols: usize, rows: usize, rng: &mut impl RngExt) -> Self {
+        let mut g = Openings {
+            cols,
+            rows,
+            open_right: vec![false; cols * rows],
+            open_up: vec![false; cols * rows],
+            tree: vec![Vec::new(); cols * rows],
+        };
+        let mut visited = vec![false; cols * rows];
+        let mut stack = vec![0usize];
+        visited[0] = true;
+        while let Some(&cur) = stack.last() {
+            let (c, r) = (cur % cols, cur / cols);
+            let mut next = Vec::with_capacity(4);
+            if c + 1 < cols && !visited[g.idx(c + 1, r)] {
+                next.push(g.idx(c + 1, r));
+            }
+            if c > 0 && !visited[g.idx(c - 1, r)] {
+                next.push(g.idx(c - 1, r));
+            }
+            if r + 1 < rows && !visited[g.idx(c, r + 1)] {
+                next.push(g.idx(c, r + 1));
+            }
+            if r > 0 && !visited[g.idx(c, r - 1)] {
+                next.push(g.idx(c, r - 1));
+            }
+            if next.is_empty() {
+                stack.pop();
+                continue;
+            }
+            let n = next[rng.random_range(0..next.len())];
+            open_between(cur, n, cols, &mut g.open_right, &mut g.open_up);
+            g.tree[cur].push(n);
+            g.tree[n].push(cur);
+            visited[n] = true;
+            stack.push(n);
+        }
+        g
     }
-    for k in 0..=rows {
-        let solid = |c: usize| k == 0 || k == rows || !open_up[idx(c, k - 1)];
-        line_runs(cols, cell, door, solid, |a, b| {
-            runs.push(([a, k as f64 * cell], [b, k as f64 * cell]))
-        });
-    }
-    let walls: Vec<Shape> = runs
-        .iter()
-        .enumerate()
-        .map(|(i, (a, b))| {
-            let name = format!("wall-{i}");
-            match config.walls {
-                WallStyle::Single => Shape { name, points: vec![*a, *b], closed: false },
-                WallStyle::Double { thickness_m } => {
-                    let h = thickness_m / 2.0;
-                    let (x0, x1) = (a[0].min(b[0]) - h, a[0].max(b[0]) + h);
-                    let (y0, y1) = (a[1].min(b[1]) - h, a[1].max(b[1]) + h);
-                    Shape {
-                        name,
-                        points: vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
-                        closed: true,
-                    }
+
+    /// Opens extra walls: whole rooms, and loops.
+    fn open_loops_and_rooms(&mut self, config: &MazeConfig, rng: &mut impl RngExt) {
+        for r in 0..self.rows {
+            for c in 0..self.cols {
+                let i = self.idx(c, r);
+                let room = rng.random_bool(config.room_probability);
+                if c + 1 < self.cols && (room || rng.random_bool(config.loop_probability)) {
+                    self.open_right[i] = true;
+                }
+                if r + 1 < self.rows && (room || rng.random_bool(config.loop_probability)) {
+                    self.open_up[i] = true;
                 }
             }
-        })
-        .collect();
+        }
+    }
 
-    // Clutter: boxes in a quadrant of random cells, clear of walls and of the
-    // centre lines the path uses.
+    /// The closed walls as maximal runs along each grid line, with doorway
+    /// gaps, drawn in the configured style.
+    fn wall_shapes(&self, config: &MazeConfig) -> Vec<Shape> {
+        let (cols, rows, cell) = (self.cols, self.rows, config.cell_m);
+        let mut runs: Vec<([f64; 2], [f64; 2])> = Vec::new();
+        let door = config.doorway_m;
+        // Vertical grid lines x = k * cell.
+        for k in 0..=cols {
+            let solid = |r: usize| k == 0 || k == cols || !self.open_right[self.idx(k - 1, r)];
+            line_runs(rows, cell, door, solid, |a, b| {
+                runs.push(([k as f64 * cell, a], [k as f64 * cell, b]))
+            });
+        }
+        for k in 0..=rows {
+            let solid = |c: usize| k == 0 || k == rows || !self.open_up[self.idx(c, k - 1)];
+            line_runs(cols, cell, door, solid, |a, b| {
+                runs.push(([a, k as f64 * cell], [b, k as f64 * cell]))
+            });
+        }
+        runs.iter()
+            .enumerate()
+            .map(|(i, (a, b))| {
+                let name = format!("wall-{i}");
+                match config.walls {
+                    WallStyle::Single => Shape { name, points: vec![*a, *b], closed: false },
+                    WallStyle::Double { thickness_m } => {
+                        let h = thickness_m / 2.0;
+                        let (x0, x1) = (a[0].min(b[0]) - h, a[0].max(b[0]) + h);
+                        let (y0, y1) = (a[1].min(b[1]) - h, a[1].max(b[1]) + h);
+                        Shape {
+                            name,
+                            points: vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
+                            closed: true,
+                        }
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// The centre of cell `i`.
+    fn centre(&self, i: usize, cell: f64) -> [f64; 2] {
+        [((i % self.cols) as f64 + 0.5) * cell, ((i / self.cols) as f64 + 0.5) * cell]
+    }
+
+    /// Waypoints of an Euler tour of the spanning tree through cell
+    /// centres, the middle of three collinear ones dropped, truncated to
+    /// the configured count.
+    fn tour(&self, config: &MazeConfig) -> Vec<[f64; 2]> {
+        let mut tour = vec![0usize];
+        let mut seen = vec![false; self.cols * self.rows];
+        seen[0] = true;
+        let mut path_stack: Vec<(usize, usize)> = vec![(0, 0)];
+        while let Some((cur, child)) = path_stack.pop() {
+            if child < self.tree[cur].len() {
+                path_stack.push((cur, child + 1));
+                let n = self.tree[cur][child];
+                if !seen[n] {
+                    seen[n] = true;
+                    tour.push(n);
+                    path_stack.push((n, 0));
+                }
+            } else if let Some(&(parent, _)) = path_stack.last() {
+                tour.push(parent);
+            }
+        }
+        let mut waypoints: Vec<[f64; 2]> = Vec::new();
+        for &i in tour.iter().skip(1) {
+            let p = self.centre(i, config.cell_m);
+            if waypoints.len() >= 2 {
+                let (a, b) = (waypoints[waypoints.len() - 2], waypoints[waypoints.len() - 1]);
+                let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+                let forward = (b[0] - a[0]) * (p[0] - b[0]) + (b[1] - a[1]) * (p[1] - b[1]);
+                if cross.abs() < 1e-9 && forward > 0.0 {
+                    waypoints.pop();
+                }
+            }
+            waypoints.push(p);
+        }
+        if let Some(max) = config.max_waypoints {
+            waypoints.truncate(max);
+        }
+        waypoints
+    }
+}
+
+/// Clutter: boxes in a quadrant of random cells, clear of walls and of the
+/// centre lines the path uses.
+fn clutter(config: &MazeConfig, rng: &mut impl RngExt) -> Vec<Shape> {
+    let (cols, rows, cell) = (config.cols, config.rows, config.cell_m);
     let half_t = match config.walls {
-        WallStyle::Single => 0.0,
         WallStyle::Double { thickness_m } => thickness_m / 2.0,
+        _ => 0.0,
     };
     let mut obstacles = Vec::new();
     for n in 0..config.clutter {
@@ -230,64 +335,7 @@ pub fn generate_maze(config: &MazeConfig, seed: u64) -> Result<Scene, ConfigErro
             closed: true,
         });
     }
-
-    // Trajectory: an Euler tour of the spanning tree through cell centres.
-    let centre = |i: usize| [((i % cols) as f64 + 0.5) * cell, ((i / cols) as f64 + 0.5) * cell];
-    let mut tour = vec![0usize];
-    let mut seen = vec![false; cols * rows];
-    seen[0] = true;
-    let mut path_stack: Vec<(usize, usize)> = vec![(0, 0)];
-    while let Some((cur, child)) = path_stack.pop() {
-        if child < tree[cur].len() {
-            path_stack.push((cur, child + 1));
-            let n = tree[cur][child];
-            if !seen[n] {
-                seen[n] = true;
-                tour.push(n);
-                path_stack.push((n, 0));
-            }
-        } else if let Some(&(parent, _)) = path_stack.last() {
-            tour.push(parent);
-        }
-    }
-    let mut waypoints: Vec<[f64; 2]> = Vec::new();
-    for &i in tour.iter().skip(1) {
-        let p = centre(i);
-        // Drop the middle of three collinear waypoints.
-        if waypoints.len() >= 2 {
-            let (a, b) = (waypoints[waypoints.len() - 2], waypoints[waypoints.len() - 1]);
-            let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
-            let forward = (b[0] - a[0]) * (p[0] - b[0]) + (b[1] - a[1]) * (p[1] - b[1]);
-            if cross.abs() < 1e-9 && forward > 0.0 {
-                waypoints.pop();
-            }
-        }
-        waypoints.push(p);
-    }
-    if let Some(max) = config.max_waypoints {
-        waypoints.truncate(max);
-    }
-    let start = centre(0);
-    Ok(Scene {
-        name: config.name.clone(),
-        description: format!(
-            "Generated maze: {cols} x {rows} cells of {cell} m, seed {seed}, {} walls, {} boxes",
-            walls.len(),
-            obstacles.len()
-        ),
-        sensor: SensorSpec::default(),
-        walls,
-        obstacles,
-        trajectory: TrajectorySpec {
-            start: StartPose { x: start[0], y: start[1], heading_deg: 0.0 },
-            waypoints,
-            speed_m_s: config.speed_m_s,
-            yaw_rate_deg_s: 90.0,
-            laps: 1,
-            scan_rate_hz: None,
-        },
-        odometry: OdometrySpec::default(),
-    })
+    obstacles
 }
 
 fn open_between(a: usize, b: usize, cols: usize, right: &mut [bool], up: &mut [bool]) {
