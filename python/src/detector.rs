@@ -141,13 +141,6 @@ impl From<&Detection<'_>> for PyDetection {
     }
 }
 
-impl PyDetection {
-    /// The detected lines (sensor frame).
-    pub fn detected_lines(&self) -> &[DetectedLine] {
-        &self.lines
-    }
-}
-
 /// Index ranges `[start, end)` as an `(n, 2)` array.
 fn ranges_array<'py>(py: Python<'py>, r: &[Range<usize>]) -> PyResult<Bound<'py, PyArray2<u64>>> {
     rows_array(py, 2, r.iter().flat_map(|r| [r.start as u64, r.end as u64]).collect())
