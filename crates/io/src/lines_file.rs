@@ -124,6 +124,24 @@ pub enum LinesFormat {
     Csv,
 }
 
+impl LinesFormat {
+    /// Appends one scan's lines to `out` as [`LinesWriter`] writes them in
+    /// this format, without what goes between scans (the JSON array's
+    /// commas): a JSON object, a JSON object and a newline, or CSV rows.
+    /// Fails only when `out` does.
+    pub fn encode(self, scan: &ScanLines, out: &mut impl Write) -> std::io::Result<()> {
+        match self {
+            // serde_json keeps the kind of a failed write (a broken pipe stays one).
+            LinesFormat::Json => serde_json::to_writer(out, scan).map_err(std::io::Error::from),
+            LinesFormat::JsonLines => {
+                serde_json::to_writer(&mut *out, scan).map_err(std::io::Error::from)?;
+                out.write_all(b"\n")
+            }
+            LinesFormat::Csv => write_csv_rows(out, scan),
+        }
+    }
+}
+
 /// The CSV header of [`LinesFormat::Csv`].
 const LINES_CSV_HEADER: &str = "scan,position,stamp_s,alpha_rad,d_m,start_x,start_y,end_x,end_y,length_m,n_points,residual_std_m,first_beam,last_beam,residual_ratio,runs_z,bow_m\n";
 
@@ -158,21 +176,23 @@ impl<W: Write> LinesWriter<W> {
 
     /// Writes one scan's lines.
     pub fn write(&mut self, scan: &ScanLines) -> std::io::Result<()> {
+        let mut body = Vec::new();
+        self.format.encode(scan, &mut body)?;
+        self.write_encoded(&body)
+    }
+
+    /// Writes one scan's lines already encoded by [`LinesFormat::encode`]
+    /// in this writer's format (so that scans can be encoded on several
+    /// threads and written in order): the same bytes as
+    /// [`LinesWriter::write`] of the scan.
+    pub fn write_encoded(&mut self, body: &[u8]) -> std::io::Result<()> {
         if self.scans == 0 {
             self.start()?;
         }
-        match self.format {
-            LinesFormat::Json => {
-                self.out.write_all(if self.scans == 0 { b"\n" } else { b",\n" })?;
-                // serde_json keeps the kind of a failed write (a broken pipe stays one).
-                serde_json::to_writer(&mut self.out, scan).map_err(std::io::Error::from)?;
-            }
-            LinesFormat::JsonLines => {
-                serde_json::to_writer(&mut self.out, scan).map_err(std::io::Error::from)?;
-                self.out.write_all(b"\n")?;
-            }
-            LinesFormat::Csv => write_csv_rows(&mut self.out, scan)?,
+        if self.format == LinesFormat::Json {
+            self.out.write_all(if self.scans == 0 { b"\n" } else { b",\n" })?;
         }
+        self.out.write_all(body)?;
         self.scans += 1;
         Ok(())
     }
