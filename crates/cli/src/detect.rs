@@ -6,13 +6,14 @@ use crate::config_file::resolve;
 use crate::exit::{BadInput, stdout_error};
 use crate::log_args::LogArgs;
 use crate::mcap_out::McapOut;
+use crate::pipeline::for_each_scan;
 use crate::progress;
 use anyhow::Result;
-use pcaline::LineDetector;
+use pcaline::{Detection, LineDetector, LineSegment};
 use pcaline_io::{
-    AtomicFile, LineRecord, LinesFormat, LinesWriter, LogRecord, NoiseRecord, PoseKind, ScanLines,
-    read_log,
+    AtomicFile, LineRecord, LinesFormat, LinesWriter, NoiseRecord, PoseKind, ScanLines, ScanRecord,
 };
+use rayon::prelude::*;
 use std::io::{BufWriter, Write};
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -46,6 +47,77 @@ pub struct DetectArgs {
     /// (topics /scan, /lines, /tf and /pose/source: see the README).
     #[arg(long, value_name = "OUT.mcap")]
     mcap: Option<PathBuf>,
+}
+
+/// Scans one detector takes in turn within a batch.
+const SCANS_PER_TASK: usize = 16;
+
+/// Detects and encodes the scans of `batch`, the first of which is scan
+/// `first` of the log, on every thread of the pool: for each scan, in
+/// order, its record as `format` encodes it and (with `keep_lines`) its
+/// lines. Each task detects with its own copy of `detector`, and a scan's
+/// lines do not depend on the scans before it, so the result is the same
+/// byte for byte whatever the number of threads.
+fn detect_batch(
+    detector: &LineDetector,
+    batch: &[ScanRecord],
+    first: usize,
+    format: LinesFormat,
+    keep_lines: bool,
+) -> Vec<(Vec<u8>, Vec<LineSegment>)> {
+    batch
+        .par_chunks(SCANS_PER_TASK)
+        .enumerate()
+        .flat_map_iter(|(task, scans)| {
+            let mut detector = detector.clone();
+            let first = first + task * SCANS_PER_TASK;
+            scans
+                .iter()
+                .enumerate()
+                .map(|(k, s)| {
+                    let d = detector.detect(&s.scan);
+                    let record = scan_lines(first + k, s, &d);
+                    let mut body = Vec::new();
+                    // Encoding into memory cannot fail.
+                    let _ = format.encode(&record, &mut body);
+                    let lines = if keep_lines {
+                        d.lines.iter().map(|l| l.line).collect()
+                    } else {
+                        Vec::new()
+                    };
+                    (body, lines)
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The output record of scan `index` of the log.
+fn scan_lines(index: usize, s: &ScanRecord, d: &Detection<'_>) -> ScanLines {
+    ScanLines {
+        scan: index,
+        position: s.position,
+        stamp_s: s.scan.stamp_s,
+        noise: d.noise.map(|n| NoiseRecord {
+            near_sigma_m: n.near_sigma_m,
+            far_sigma_m: n.far_sigma_m,
+            far_from_m: n.far_from_m.is_finite().then_some(n.far_from_m),
+            estimated: d.noise_estimate.is_some(),
+            range_step_m: d.noise_estimate.map(|e| e.range_step_m),
+        }),
+        lines: d
+            .lines
+            .iter()
+            .map(|l| {
+                let s = l.straightness;
+                LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))).with_straightness(
+                    s.residual_ratio,
+                    s.runs_z,
+                    s.bow_m,
+                )
+            })
+            .collect(),
+    }
 }
 
 /// Where the lines go: a file written atomically, or stdout.
@@ -95,7 +167,7 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     }
     let config = resolve(&args.config, 0.01)?;
     let sensor = args.log.sensor(&args.file, config.sensor)?;
-    let mut detector = LineDetector::new(config.detector_for(sensor))?;
+    let detector = LineDetector::new(config.detector_for(sensor))?;
     let mut mcap = McapOut::create(args.mcap.as_deref())?;
     let output = args.output.as_deref().filter(|p| *p != Path::new("-"));
     let sink = match output {
@@ -112,51 +184,35 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
     let bar = progress::spinner("scans", quiet);
     let mut lines_total = 0usize;
     let mut failed: Option<anyhow::Error> = None;
-    read_log(&args.file, &args.log.options()?, |record| {
-        let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
-        let d = detector.detect(&s.scan);
-        let scan =
-            ScanLines {
-                scan: out.scans(),
-                position: s.position,
-                stamp_s: s.scan.stamp_s,
-                noise: d.noise.map(|n| NoiseRecord {
-                    near_sigma_m: n.near_sigma_m,
-                    far_sigma_m: n.far_sigma_m,
-                    far_from_m: n.far_from_m.is_finite().then_some(n.far_from_m),
-                    estimated: d.noise_estimate.is_some(),
-                    range_step_m: d.noise_estimate.map(|e| e.range_step_m),
-                }),
-                lines: d
-                    .lines
-                    .iter()
-                    .map(|l| {
-                        let s = l.straightness;
-                        LineRecord::new(&l.line, Some((l.first_beam, l.last_beam)))
-                            .with_straightness(s.residual_ratio, s.runs_z, s.bow_m)
-                    })
-                    .collect(),
-            };
-        lines_total += scan.lines.len();
-        if let Some(m) = mcap.as_mut() {
-            let stamp = m.stamp(s.scan.stamp_s);
-            let pose = [(PoseKind::SensorFromLog, s.pose.or(s.odometry))];
-            if let Err(e) = m.scan(stamp, &s.scan, d.lines.iter().map(|l| &l.line), &pose) {
-                failed = Some(e);
+    let keep_lines = mcap.is_some();
+    let read = for_each_scan(
+        &args.file,
+        &args.log.options()?,
+        |first, batch| detect_batch(&detector, batch, first, format, keep_lines),
+        |s, (body, lines)| {
+            lines_total += lines.len();
+            if let Some(m) = mcap.as_mut() {
+                let stamp = m.stamp(s.scan.stamp_s);
+                let pose = [(PoseKind::SensorFromLog, s.pose.or(s.odometry))];
+                if let Err(e) = m.scan(stamp, &s.scan, lines.iter(), &pose) {
+                    failed = Some(e);
+                    return ControlFlow::Break(());
+                }
+            }
+            if let Err(e) = out.write_encoded(&body) {
+                failed = Some(sink_error(output, e));
                 return ControlFlow::Break(());
             }
-        }
-        if let Err(e) = out.write(&scan) {
-            failed = Some(sink_error(output, e));
-            return ControlFlow::Break(());
-        }
-        bar.inc(1);
-        ControlFlow::Continue(())
-    })?;
-    bar.finish_and_clear();
+            bar.inc(1);
+            ControlFlow::Continue(())
+        },
+    );
+    // A failed write stops the run before anything read after it can.
     if let Some(e) = failed {
         return Err(e);
     }
+    read?;
+    bar.finish_and_clear();
     let scans = out.scans();
     if scans == 0 {
         // Nothing is written: the temporary files are dropped.

@@ -15,6 +15,7 @@ use pcaline_eval::{
 };
 use pcaline_io::parse_scene;
 use pcaline_sim::{Scene, SimFrame, Simulator, World};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
 
@@ -383,27 +384,45 @@ fn localization_rows(
         "localization runs",
         quiet,
     );
+    // Every (configuration, scene, seed) run on the thread pool; the scores
+    // are pooled afterwards in this order, so the sums, and the table, do
+    // not depend on the number of threads.
+    let runs: Vec<(usize, &Scene, u64)> = (0..configs.len())
+        .flat_map(|c| {
+            scenes.iter().flat_map(move |scene| (1..=seeds).map(move |seed| (c, scene, seed)))
+        })
+        .collect();
+    let scores: Vec<Result<(usize, Vec<AidedScore>)>> = runs
+        .par_iter()
+        .map(|&(c, scene, seed)| {
+            let c = &configs[c];
+            // The estimator with the configuration's own settings.
+            let aiding: Vec<AidingConfig> = modes
+                .iter()
+                .map(
+                    |(_, a)| if a.mode == AidingMode::Estimator { c.aiding_in(a.mode) } else { *a },
+                )
+                .collect();
+            let sim = Simulator::new(scene, seed).map_err(|e| BadInput(e.to_string()))?;
+            let mut detector = LineDetector::new(c.detector)?;
+            let run = AidedRun::run(&sim, c.map, &aiding, |frame, velocity| {
+                let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
+                detection.lines.iter().map(SensorLine::from).collect()
+            })?;
+            let scores = run.scores(sim.true_poses()).context("a scene without scans")?;
+            bar.inc(1);
+            Ok((sim.len(), scores))
+        })
+        .collect();
+    let mut scores = scores.into_iter();
     let mut rows = Vec::new();
     for c in configs {
-        // The estimator with the configuration's own settings.
-        let aiding: Vec<AidingConfig> = modes
-            .iter()
-            .map(|(_, a)| if a.mode == AidingMode::Estimator { c.aiding_in(a.mode) } else { *a })
-            .collect();
         let mut pooled: Vec<Pooled> = modes.iter().map(|_| Pooled::default()).collect();
-        for scene in scenes {
-            for seed in 1..=seeds {
-                let sim = Simulator::new(scene, seed).map_err(|e| BadInput(e.to_string()))?;
-                let mut detector = LineDetector::new(c.detector)?;
-                let run = AidedRun::run(&sim, c.map, &aiding, |frame, velocity| {
-                    let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
-                    detection.lines.iter().map(SensorLine::from).collect()
-                })?;
-                let scores = run.scores(sim.true_poses()).context("a scene without scans")?;
-                for (p, s) in pooled.iter_mut().zip(&scores) {
-                    p.add(sim.len(), s);
-                }
-                bar.inc(1);
+        for _ in 0..scenes.len() as u64 * seeds {
+            let Some(run) = scores.next() else { break };
+            let (scans, run) = run?;
+            for (p, s) in pooled.iter_mut().zip(&run) {
+                p.add(scans, s);
             }
         }
         for ((name, _), p) in modes.iter().zip(&pooled) {

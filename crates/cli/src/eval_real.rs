@@ -19,6 +19,7 @@ use pcaline_io::{
     read_scan_pairs,
 };
 use pcaline_sim::OdometryModel;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::ops::ControlFlow;
 use std::path::Path;
@@ -287,15 +288,33 @@ pub fn detection_stats(
 
 /// Runs every real-data measurement on the datasets folder `data`.
 pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<RealReport> {
-    let (csail_pairs, csail) = csail(data, config)?;
-    let (intel, mut own_poses, drift_grid) = intel(data, seed, config, grid)?;
-    own_poses.extend(csail_own(data, config)?);
-    let (detection, detection_with_sensor): (Vec<_>, Vec<_>) = DETECTION_LOGS
-        .iter()
-        .map(|(log, sensor)| detection_stats(&data.join(log), log, config, *sensor))
-        .collect::<Result<Vec<_>>>()?
-        .into_iter()
-        .unzip();
+    // The logs on the thread pool; each part's figures do not depend on
+    // the others or on the number of threads.
+    let ((csail, intel), (csail_own, (detection, utm))) = rayon::join(
+        || rayon::join(|| csail(data, config), || intel(data, seed, config, grid)),
+        || {
+            rayon::join(
+                || csail_own(data, config),
+                || {
+                    rayon::join(
+                        || {
+                            DETECTION_LOGS
+                                .par_iter()
+                                .map(|(log, sensor)| {
+                                    detection_stats(&data.join(log), log, config, *sensor)
+                                })
+                                .collect::<Result<Vec<_>>>()
+                        },
+                        || utm_residuals(&data.join("utm30lx-ros2"), config),
+                    )
+                },
+            )
+        },
+    );
+    let (csail_pairs, csail) = csail?;
+    let (intel, mut own_poses, drift_grid) = intel?;
+    own_poses.extend(csail_own?);
+    let (detection, detection_with_sensor): (Vec<_>, Vec<_>) = detection?.into_iter().unzip();
     Ok(RealReport {
         config: config.name.clone(),
         csail_pairs,
@@ -304,7 +323,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
         own_poses,
         drift_grid,
         intel_drift_seed: seed,
-        utm: utm_residuals(&data.join("utm30lx-ros2"), config)?,
+        utm: utm?,
         detection,
         detection_with_sensor,
     })
@@ -586,15 +605,24 @@ fn intel(
     for ((name, _, _), poses) in modes(config).iter().zip(intel_run(&records, &drifted, config)?) {
         rows.push(row(format!("drifted, {name}"), intel_score(&records, &relations, &poses)?));
     }
-    let mut cells = Vec::new();
-    if grid {
-        for bias in DRIFT_GRID_BIAS_DEG_S {
-            for s in DRIFT_GRID_SEEDS {
-                let model = drift_model(bias, s);
-                let drifted = model.corrupt_stamped(&corrected, &times, s);
-                for ((name, _, _), poses) in
-                    modes(config).iter().zip(intel_run(&records, &drifted, config)?)
-                {
+    // The cells on the thread pool, gathered in grid order.
+    let cells: Vec<(f64, u64)> = if grid {
+        DRIFT_GRID_BIAS_DEG_S
+            .iter()
+            .flat_map(|&b| DRIFT_GRID_SEEDS.iter().map(move |&s| (b, s)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let cells = cells
+        .par_iter()
+        .map(|&(bias, s)| {
+            let model = drift_model(bias, s);
+            let drifted = model.corrupt_stamped(&corrected, &times, s);
+            modes(config)
+                .iter()
+                .zip(intel_run(&records, &drifted, config)?)
+                .map(|((name, _, _), poses)| {
                     // At the scans, aligned at the first scan: the drift
                     // before it is no aiding's to undo.
                     let e = aligned_trajectory_errors(
@@ -602,7 +630,7 @@ fn intel(
                         &at_scans(&records, &corrected),
                     )
                     .context("no scans")?;
-                    cells.push(DriftCell {
+                    Ok(DriftCell {
                         heading_rate_bias_deg_s: bias,
                         speed_scale_error: model.speed_scale_error,
                         seed: s,
@@ -610,11 +638,14 @@ fn intel(
                         heading_rms_deg: e.heading_rms_rad.to_degrees(),
                         position_rms_m: e.position_rms_m,
                         relations: intel_score(&records, &relations, &poses)?,
-                    });
-                }
-            }
-        }
-    }
+                    })
+                })
+                .collect::<Result<Vec<_>>>()
+        })
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect();
     Ok((rows, moved, cells))
 }
 

@@ -17,6 +17,7 @@ mod map_cmd;
 mod mcap_out;
 mod out;
 mod picture;
+mod pipeline;
 mod progress;
 mod reproduce;
 mod run;
@@ -34,6 +35,12 @@ struct Cli {
     /// Print nothing but results and errors.
     #[arg(long, short, global = true)]
     quiet: bool,
+    /// Threads for work that is independent scan by scan or run by run
+    /// (`detect`, the detection of `map`, the runs of `eval`). Default: one
+    /// per core (or `RAYON_NUM_THREADS`). The results are the same byte for
+    /// byte whatever the number.
+    #[arg(long, global = true, value_name = "N", value_parser = count_at_least_one)]
+    threads: Option<usize>,
     #[command(subcommand)]
     command: Command,
 }
@@ -111,6 +118,12 @@ fn main() -> ExitCode {
         std::process::exit(130);
     });
     let cli = Cli::parse();
+    if let Some(n) = cli.threads
+        && let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n).build_global()
+    {
+        eprintln!("error: --threads {n}: {e}");
+        return ExitCode::FAILURE;
+    }
     let result = match cli.command {
         Command::Run(args) => run::run(&args, cli.quiet),
         Command::Scene(cmd) => scene_cmd::run(&cmd, cli.quiet),

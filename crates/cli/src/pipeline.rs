@@ -1,0 +1,175 @@
+//! The scans of a log on every core, in order: one thread reads and parses
+//! the log a batch at a time, a second hands each batch to the thread pool
+//! (`--threads`) for the work that is independent scan by scan, and the
+//! caller's thread takes the results in log order. The three overlap, and
+//! each stage holds at most two batches, so memory does not grow with the
+//! log.
+//!
+//! Invariants: the caller sees every scan in log order, once, with its
+//! result; the results do not depend on the number of threads when `work`
+//! computes each scan's result from that scan alone; a read error comes
+//! after every scan before it has been consumed, as in a sequential read;
+//! and when `consume` breaks, nothing after that scan is consumed and the
+//! other stages stop.
+
+use pcaline_io::{IoError, LogOptions, LogRecord, ScanRecord, read_log};
+use std::ops::ControlFlow;
+use std::path::Path;
+use std::sync::mpsc;
+
+/// Scans read and worked on together: enough to keep every thread busy,
+/// few enough that memory does not grow with the log.
+pub const BATCH_SCANS: usize = 256;
+
+/// Runs `work` over the scans of `file` in batches on the thread pool and
+/// `consume` on each scan and its result in log order, on this thread.
+/// `work(first, scans)` gets a batch whose first scan is scan `first` of the
+/// log (from 0) and returns one result per scan. Returns the read's result:
+/// the number of records read, or the error that stopped it.
+pub fn for_each_scan<T: Send>(
+    file: &Path,
+    options: &LogOptions,
+    work: impl Fn(usize, &[ScanRecord]) -> Vec<T> + Sync,
+    mut consume: impl FnMut(ScanRecord, T) -> ControlFlow<()>,
+) -> Result<usize, IoError> {
+    let (raw_out, raw_in) = mpsc::sync_channel::<Vec<ScanRecord>>(2);
+    let (done_out, done_in) = mpsc::sync_channel::<(Vec<ScanRecord>, Vec<T>)>(2);
+    std::thread::scope(|scope| {
+        // Each stage stops at the first send that finds the next one gone.
+        let reader = scope.spawn(move || {
+            let mut batch = Vec::with_capacity(BATCH_SCANS);
+            let read = read_log(file, options, |record| {
+                let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
+                batch.push(s);
+                if batch.len() == BATCH_SCANS
+                    && raw_out
+                        .send(std::mem::replace(&mut batch, Vec::with_capacity(BATCH_SCANS)))
+                        .is_err()
+                {
+                    return ControlFlow::Break(());
+                }
+                ControlFlow::Continue(())
+            });
+            if !batch.is_empty() {
+                let _ = raw_out.send(batch);
+            }
+            read
+        });
+        let work = &work;
+        scope.spawn(move || {
+            let mut first = 0;
+            for batch in raw_in {
+                let results = work(first, &batch);
+                first += batch.len();
+                if done_out.send((batch, results)).is_err() {
+                    break;
+                }
+            }
+        });
+        'batches: for (batch, results) in done_in {
+            for (scan, result) in batch.into_iter().zip(results) {
+                if consume(scan, result).is_break() {
+                    break 'batches;
+                }
+            }
+        }
+        // Leaving the loop drops the receiver, which stops the other stages.
+        reader.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A CARMEN log of `scans` FLASER lines in the system's temporary
+    /// folder (line `bad_at + 1` with a range that is not a number),
+    /// removed when dropped.
+    struct TempLog(std::path::PathBuf);
+
+    impl Drop for TempLog {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_file(&self.0);
+        }
+    }
+
+    fn log(scans: usize, bad_at: Option<usize>) -> TempLog {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static NEXT: AtomicUsize = AtomicUsize::new(0);
+        let path = std::env::temp_dir().join(format!(
+            "pcaline-pipeline-{}-{}.clf",
+            std::process::id(),
+            NEXT.fetch_add(1, Ordering::Relaxed)
+        ));
+        let mut text = String::new();
+        for k in 0..scans {
+            let range = if bad_at == Some(k) { "x".to_string() } else { format!("{}", 1 + k % 7) };
+            let ranges = format!(" {range}").repeat(180);
+            text.push_str(&format!("FLASER 180{ranges} 0 0 0 0 0 0 {k} host {k}\n"));
+        }
+        std::fs::write(&path, text).unwrap();
+        TempLog(path)
+    }
+
+    /// Every scan once, in order, with its own result, across batches.
+    #[test]
+    fn scans_arrive_in_order_with_their_results() {
+        let log = log(3 * BATCH_SCANS + 17, None);
+        let mut seen = Vec::new();
+        let read = for_each_scan(
+            &log.0,
+            &LogOptions::default(),
+            |first, scans| (first..first + scans.len()).collect(),
+            |scan, index| {
+                seen.push((index, scan.position));
+                ControlFlow::Continue(())
+            },
+        );
+        assert_eq!(read.unwrap(), 3 * BATCH_SCANS + 17);
+        let want: Vec<(usize, usize)> = (0..3 * BATCH_SCANS + 17).map(|k| (k, k + 1)).collect();
+        assert_eq!(seen, want);
+    }
+
+    /// A bad line is reported after every scan before it was consumed, with
+    /// the line number a sequential read reports.
+    #[test]
+    fn a_read_error_comes_after_the_scans_before_it() {
+        let bad = BATCH_SCANS + 5;
+        let log = log(2 * BATCH_SCANS, Some(bad));
+        let mut consumed = 0;
+        let err = for_each_scan(
+            &log.0,
+            &LogOptions::default(),
+            |_, scans| vec![(); scans.len()],
+            |_, ()| {
+                consumed += 1;
+                ControlFlow::Continue(())
+            },
+        )
+        .unwrap_err();
+        assert_eq!(consumed, bad);
+        let mut sequential = None;
+        let _ = read_log(&log.0, &LogOptions::default(), |_| ControlFlow::Continue(()))
+            .map_err(|e| sequential = Some(e.to_string()));
+        assert_eq!(Some(err.to_string()), sequential);
+        assert!(err.to_string().contains(&format!(":{}:", bad + 1)), "{err}");
+    }
+
+    /// A consumer that stops gets nothing more, and the run ends.
+    #[test]
+    fn a_consumer_that_breaks_stops_everything() {
+        let log = log(4 * BATCH_SCANS, None);
+        let mut consumed = 0;
+        let read = for_each_scan(
+            &log.0,
+            &LogOptions::default(),
+            |_, scans| vec![(); scans.len()],
+            |_, ()| {
+                consumed += 1;
+                if consumed == 10 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+            },
+        );
+        assert!(read.is_ok());
+        assert_eq!(consumed, 10);
+    }
+}
