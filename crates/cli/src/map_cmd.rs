@@ -6,15 +6,14 @@ use crate::log_args::LogArgs;
 use crate::mcap_out::McapOut;
 use crate::out::outln;
 use crate::picture::add_svg_and_png;
+use crate::pipeline::for_each_scan;
 use crate::progress;
 use crate::svg::{Mark, Plot};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use pcaline::aiding::{AidingMode, EdgeKind, LoopOutcome};
 use pcaline::{Mapper, MapperConfig, Pose2};
-use pcaline_io::{
-    LogRecord, OutputSet, PoseKind, json_bytes, map_csv_text, map_json_bytes, read_log,
-};
+use pcaline_io::{OutputSet, PoseKind, ScanRecord, json_bytes, map_csv_text, map_json_bytes};
 use serde::Serialize;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -146,8 +145,11 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     let mut sharpness = pcaline_eval::OccupiedCells::new(0.05);
     let mut mcap = McapOut::create(args.mcap.as_deref())?;
     let mut failed: Option<anyhow::Error> = None;
-    read_log(&args.log, &args.input.options()?, |record| {
-        let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
+    // The log is parsed on its own thread, ahead of the mapping. Detection
+    // stays here: its deskew uses the velocity of the step before, which
+    // the estimator gives in LIDAR-only mode.
+    let no_work = |_: usize, batch: &[ScanRecord]| vec![(); batch.len()];
+    for_each_scan(&args.log, &args.input.options()?, no_work, |s, ()| {
         // Deskewed with the velocity of the last step (the source's, or the
         // estimator's without one), when the scan has its beam timing (ROS
         // time_increment).
