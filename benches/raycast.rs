@@ -9,13 +9,9 @@ use pcaline_sim::{MazeConfig, Simulator, WallStyle, generate_maze};
 use std::hint::black_box;
 
 fn world(cols: usize, rows: usize) -> Simulator {
-    let config = MazeConfig {
-        cols,
-        rows,
-        walls: WallStyle::Double { thickness_m: 0.1 },
-        clutter: cols * rows / 4,
-        ..MazeConfig::small("bench")
-    };
+    let mut config = MazeConfig::small("bench");
+    (config.cols, config.rows, config.clutter) = (cols, rows, cols * rows / 4);
+    config.walls = WallStyle::Double { thickness_m: 0.1 };
     let scene = generate_maze(&config, 1).expect("valid maze");
     Simulator::new(&scene, 1).expect("valid scene")
 }

@@ -7,6 +7,7 @@ use pcaline_segmentation::{NoiseEstimation, SegmentationConfig};
 /// Configuration of [`crate::LineDetector`]: segmentation and fitting.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct Config {
     /// Level-1 and level-2 clustering.
     pub segmentation: SegmentationConfig,
@@ -100,29 +101,9 @@ impl Config {
     /// the chord, `ETh` 50, and a merge of neighbours within 2° (thresholds
     /// in metres and degrees, not following the noise).
     pub fn split_and_merge() -> Self {
-        use pcaline_fitting::MergeRule;
-        use pcaline_segmentation::{BreakRule, Level2Rule};
         Config {
-            segmentation: SegmentationConfig {
-                level1: BreakRule::Fixed { dth_m: 0.15 },
-                min_cluster_points: 5,
-                level2: Level2Rule::SplitAtFarthest {
-                    sigma_factor: 1.0,
-                    min_distance_m: 0.05,
-                    noise: RangeNoise::constant(0.0),
-                },
-            },
-            fitting: FitConfig {
-                eth: 50.0,
-                min_points: 5,
-                merge: MergeRule::Angles { alpha_t_rad: 2f64.to_radians() },
-                corner_window: 0,
-                residual_test: None,
-                min_line_points: 0,
-                min_line_length_m: 0.0,
-                orientation_test: None,
-                straightness_test: None,
-            },
+            segmentation: SegmentationConfig::split_and_merge(),
+            fitting: FitConfig::split_and_merge(),
             noise_estimation: None,
         }
     }

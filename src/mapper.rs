@@ -13,6 +13,7 @@ use pcaline_mapping::{LineMap, MapConfig};
 /// which reads back as infinite).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct MapperConfig {
     /// The line detector.
     pub detector: Config,
@@ -33,6 +34,34 @@ pub struct MapperConfig {
 }
 
 impl MapperConfig {
+    /// A mapper of `detector`, `map` and `aiding`, without loop closure,
+    /// with the sensor at the vehicle's origin ([`MapperConfig::with_loop_closure`],
+    /// [`MapperConfig::with_mount`]).
+    pub fn new(detector: Config, map: MapConfig, aiding: AidingConfig) -> Self {
+        MapperConfig {
+            detector,
+            map,
+            aiding,
+            loop_closure: None,
+            vehicle_from_sensor: Pose2::identity(),
+        }
+    }
+
+    /// The same with the aiding `aiding`.
+    pub fn with_aiding(self, aiding: AidingConfig) -> Self {
+        MapperConfig { aiding, ..self }
+    }
+
+    /// The same with loop closure `loop_closure` (`None`: off).
+    pub fn with_loop_closure(self, loop_closure: Option<LoopClosureConfig>) -> Self {
+        MapperConfig { loop_closure, ..self }
+    }
+
+    /// The same with the LIDAR at `vehicle_from_sensor` on the vehicle.
+    pub fn with_mount(self, vehicle_from_sensor: Pose2) -> Self {
+        MapperConfig { vehicle_from_sensor, ..self }
+    }
+
     /// The paper throughout: its detector, its map (eq. 8-10, endpoints
     /// extended only) and its heading aiding (eq. 11-14).
     pub fn paper() -> Self {
@@ -62,6 +91,7 @@ impl Default for MapperConfig {
 
 /// What one scan did.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct MapperStep {
     /// The corrected `world_from_vehicle` (`world_from_sensor` with the
     /// default mount).
@@ -236,9 +266,7 @@ mod mount_tests {
 
     #[test]
     fn a_mounted_sensor_maps_as_the_sensor_itself() {
-        let scene =
-            generate_maze(&MazeConfig { cols: 3, rows: 2, ..MazeConfig::small("mount") }, 5)
-                .unwrap();
+        let scene = generate_maze(&MazeConfig::small("mount").with_grid(3, 2), 5).unwrap();
         let sim = Simulator::new(&scene, 3).unwrap();
         // 30 cm forward, 10 cm right, turned 0.2 rad to the left.
         let vehicle_from_sensor = Pose2::new(0.3, -0.1, 0.2);

@@ -47,7 +47,7 @@ fn run(scene: &Scene, seed: u64, config: MapperConfig) -> Run {
 /// weights) is measured by `pcaline eval`: the closest match dominates the
 /// weights however noisy its lines are.
 fn heading_aiding() -> MapperConfig {
-    MapperConfig { aiding: AidingConfig::heading(), ..MapperConfig::default() }
+    MapperConfig::default().with_aiding(AidingConfig::heading())
 }
 
 #[test]
@@ -57,7 +57,7 @@ fn paper_heading_aiding_bounds_a_pure_heading_bias() {
     scene.odometry.heading_rate_bias_deg_s = 0.5;
     // Eq. 11-14 exactly (eq. 13's 1/d_rho² weights), and with inverse-variance
     // weights, both on the default detector and map.
-    let exact = MapperConfig { aiding: AidingConfig::paper(), ..MapperConfig::default() };
+    let exact = MapperConfig::default().with_aiding(AidingConfig::paper());
     for config in [exact, heading_aiding()] {
         let r = run(&scene, 1, config);
         assert!(r.duration_s >= 60.0);

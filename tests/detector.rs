@@ -4,7 +4,7 @@
 mod support;
 
 use pcaline::segmentation::{DerivativeSign, Level2Rule};
-use pcaline::{Config, LineDetector, Point2, Scan, fitting::FitConfig, geometry::wrap_angle};
+use pcaline::{Config, LineDetector, Point2, Scan, geometry::wrap_angle};
 use proptest::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 use support::*;
@@ -216,7 +216,8 @@ fn invalid_configurations_are_typed_errors() {
     let mut c = Config::paper();
     c.segmentation.level1 = pcaline::segmentation::BreakRule::Fixed { dth_m: -1.0 };
     assert!(LineDetector::new(c).is_err());
-    let c = Config { fitting: FitConfig { eth: 1.0, ..FitConfig::paper() }, ..Config::paper() };
+    let mut c = Config::paper();
+    c.fitting.eth = 1.0;
     assert!(LineDetector::new(c).is_err());
 }
 

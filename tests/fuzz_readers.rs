@@ -15,7 +15,8 @@ fn tmp_dir() -> PathBuf {
 }
 
 fn read_all(path: &Path, format: Option<LogFormat>) {
-    let options = LogOptions { format, ..LogOptions::default() };
+    let mut options = LogOptions::default();
+    options.format = format;
     let _ = read_log(path, &options, |_| ControlFlow::Continue(()));
 }
 

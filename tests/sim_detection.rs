@@ -67,7 +67,7 @@ fn noiseless_corridor_runs_are_all_detected() {
 /// collinear pieces end to end: the pieces are one visible surface.
 #[test]
 fn a_wall_drawn_in_pieces_scores_as_one() {
-    use pcaline_eval::{DetectFn, DetectionCriteria, DetectionEval, FaultMode, evaluate_detectors};
+    use pcaline_eval::{DetectFn, DetectionEval, evaluate_detectors};
     let room = |pieces: usize| {
         // A 6 x 4 m room, each side cut into `pieces` equal collinear segments.
         let corners = [[0.0, 0.0], [6.0, 0.0], [6.0, 4.0], [0.0, 4.0]];
@@ -89,15 +89,7 @@ fn a_wall_drawn_in_pieces_scores_as_one() {
         );
         pcaline_io::parse_scene(Path::new("room.toml"), &text).unwrap()
     };
-    let eval = DetectionEval {
-        sigma_m: 0.01,
-        range_resolution_m: 0.0,
-        faults: FaultMode::Off,
-        keep_motion: false,
-        seeds: 1,
-        scans: 20,
-        criteria: DetectionCriteria::default(),
-    };
+    let eval = DetectionEval::new(0.01, 1, 20);
     let recall = |pieces| {
         let mut detector = LineDetector::new(Config::default()).unwrap();
         let mut detect = |f: &pcaline_sim::SimFrame, _: &pcaline_sim::World| {

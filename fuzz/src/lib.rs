@@ -18,7 +18,8 @@ pub fn input_file(name: &str, data: &[u8]) -> PathBuf {
 pub fn read_every_way(name: &str, format: LogFormat, data: &[u8]) {
     let path = input_file(name, data);
     for format in [Some(format), None] {
-        let options = LogOptions { format, ..LogOptions::default() };
+        let mut options = LogOptions::default();
+        options.format = format;
         let _ = read_log(&path, &options, |_| ControlFlow::Continue(()));
     }
 }

@@ -32,13 +32,13 @@ fn criteria(
     if !(0.0..=1.0).contains(&min_overlap) {
         return Err(value_error(format!("min_overlap: {min_overlap} must be in [0, 1]")));
     }
-    Ok(DetectionCriteria {
-        min_beams,
-        min_extent_m,
-        max_angle_rad: max_angle_deg.to_radians(),
-        max_endpoint_m,
-        min_overlap,
-    })
+    let mut criteria = DetectionCriteria::default();
+    criteria.min_beams = min_beams;
+    criteria.min_extent_m = min_extent_m;
+    criteria.max_angle_rad = max_angle_deg.to_radians();
+    criteria.max_endpoint_m = max_endpoint_m;
+    criteria.min_overlap = min_overlap;
+    Ok(criteria)
 }
 
 /// The true visible walls of a simulated frame, sensor frame: maximal runs

@@ -71,11 +71,13 @@ pub fn read_log_py(
     if !path.exists() {
         return Err(io_error(IoError::io(&path, std::io::ErrorKind::NotFound.into())));
     }
-    let options = LogOptions {
-        format,
-        topic,
-        carmen: CarmenOptions { fov_rad: fov.map(f64::to_radians), max_range_m, ..defaults },
-    };
+    let mut carmen = defaults;
+    carmen.fov_rad = fov.map(f64::to_radians);
+    carmen.max_range_m = max_range_m;
+    let mut options = LogOptions::default();
+    options.format = format;
+    options.topic = topic;
+    options.carmen = carmen;
     let (tx, rx) = sync_channel(READ_AHEAD);
     let reader_path = path.clone();
     std::thread::Builder::new()

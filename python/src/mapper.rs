@@ -69,16 +69,10 @@ impl PyMapper {
                 return Err(value_error(format!("aiding: {other:?} is not one of {AIDING}")));
             }
         };
-        let config = MapperConfig {
-            detector: named.detector,
-            map: named.map,
-            aiding,
-            loop_closure: loop_closure.then_some(named.loop_closure),
-            vehicle_from_sensor: mount
-                .map(|m| pose_from(m, "mount"))
-                .transpose()?
-                .unwrap_or_default(),
-        };
+        let mount = mount.map(|m| pose_from(m, "mount")).transpose()?.unwrap_or_default();
+        let config = MapperConfig::new(named.detector, named.map, aiding)
+            .with_loop_closure(loop_closure.then_some(named.loop_closure))
+            .with_mount(mount);
         Ok(PyMapper { mapper: Mapper::new(config).map_err(value_error)? })
     }
 

@@ -71,7 +71,8 @@ pub fn generate_maze_py(
     clutter: usize,
     name: &str,
 ) -> PyResult<PyScene> {
-    let config = MazeConfig { cols, rows, cell_m, clutter, ..MazeConfig::small(name) };
+    let mut config = MazeConfig::small(name);
+    (config.cols, config.rows, config.cell_m, config.clutter) = (cols, rows, cell_m, clutter);
     Ok(PyScene { scene: generate_maze(&config, seed).map_err(value_error)? })
 }
 

@@ -496,13 +496,11 @@ impl Aiding {
             let offset_gate = (3.5 * (sigma_position + lever * sigma_heading))
                 .max(map_gate.max_offset_m.unwrap_or(0.0))
                 .min(e.max_gate_offset_m);
-            let gate = MatchGate {
-                max_d_alpha_rad: (3.5 * sigma_heading)
-                    .max(map_gate.max_d_alpha_rad)
-                    .min(e.max_gate_alpha_rad),
-                max_d_rho_m: map_gate.max_d_rho_m.max(2.0 * offset_gate),
-                max_offset_m: Some(offset_gate),
-            };
+            let gate = MatchGate::new(
+                (3.5 * sigma_heading).max(map_gate.max_d_alpha_rad).min(e.max_gate_alpha_rad),
+                map_gate.max_d_rho_m.max(2.0 * offset_gate),
+                Some(offset_gate),
+            );
             let mut best: Option<(f64, usize, LineId, LineMeasurement)> = None;
             let mut in_gate: Vec<LineMeasurement> = Vec::new();
             let mut unconfirmed = false;

@@ -322,6 +322,7 @@ pub struct LoopRecord {
 
 /// What one scan did in [`LoopClosing`].
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct LoopStep {
     /// The corrected `world_from_sensor` (after the optimization, if one ran).
     pub pose: Pose2,

@@ -153,6 +153,7 @@ pub enum NotOptimized {
 /// What one optimization did.
 #[derive(Debug, Clone, PartialEq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct OptimizeReport {
     /// Why the poses were kept, if they were.
     pub kept: Option<NotOptimized>,

@@ -18,6 +18,7 @@ pub type MeasureAt = std::sync::Arc<dyn Fn(&Pose2) -> Vec<LineMeasurement> + Sen
 /// One scan in the window: the source's increment from the previous pose
 /// (body frame) with its covariance, and the scan's matches as a function
 /// of its pose.
+#[non_exhaustive]
 pub struct WindowStep {
     /// The increment from the previous pose, previous body frame.
     pub increment: Pose2,

@@ -315,18 +315,14 @@ fn detection_rows(
         }
     }
     let mut refs: Vec<&mut DetectFn<'_>> = closures.iter_mut().map(|c| c.as_mut()).collect();
-    let eval = DetectionEval {
-        sigma_m,
-        range_resolution_m: args.range_step_mm / 1000.0,
-        faults: match args.faults {
-            Faults::Off => FaultMode::Off,
-            Faults::On => FaultMode::On,
-        },
-        keep_motion: args.keep_motion,
-        seeds: args.seeds,
-        scans: args.scans,
-        criteria,
+    let mut eval = DetectionEval::new(sigma_m, args.seeds, args.scans);
+    eval.range_resolution_m = args.range_step_mm / 1000.0;
+    eval.faults = match args.faults {
+        Faults::Off => FaultMode::Off,
+        Faults::On => FaultMode::On,
     };
+    eval.keep_motion = args.keep_motion;
+    eval.criteria = criteria;
     let results =
         evaluate_detectors(scenes, &eval, &mut refs).map_err(|e| BadInput(e.to_string()))?;
     Ok(names

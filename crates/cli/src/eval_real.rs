@@ -461,7 +461,8 @@ pub struct DriftCell {
 
 /// The Intel log's records, time-ordered, with each scan's lines.
 fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> {
-    let options = CarmenOptions { time_offset_s: INTEL_TIME_OFFSET_S, ..CarmenOptions::default() };
+    let mut options = CarmenOptions::default();
+    options.time_offset_s = INTEL_TIME_OFFSET_S;
     let log = data.join("intel").join("intel.gfs.log");
     let mut detector = LineDetector::new(config.detector)?;
     let mut records = Vec::new();

@@ -3,7 +3,7 @@
 use crate::exit::BadInput;
 use clap::ValueEnum;
 use pcaline::geometry::SensorProfile;
-use pcaline_io::{CarmenOptions, LogFormat, LogOptions, LogRecord, read_log};
+use pcaline_io::{LogFormat, LogOptions, LogRecord, read_log};
 use std::ops::ControlFlow;
 use std::path::Path;
 
@@ -93,21 +93,18 @@ impl LogArgs {
             ))
             .into());
         }
-        Ok(LogOptions {
-            format: self.format.map(|f| match f {
-                FormatArg::Carmen => LogFormat::Carmen,
-                FormatArg::Ros1 => LogFormat::Ros1Bag,
-                FormatArg::Ros2 => LogFormat::Ros2Bag,
-                FormatArg::Mcap => LogFormat::Mcap,
-                FormatArg::Json => LogFormat::Json,
-                FormatArg::Csv => LogFormat::Csv,
-            }),
-            topic: self.topic.clone(),
-            carmen: CarmenOptions {
-                fov_rad: self.fov.map(f64::to_radians),
-                max_range_m: self.max_range,
-                ..CarmenOptions::default()
-            },
-        })
+        let mut options = LogOptions::default();
+        options.format = self.format.map(|f| match f {
+            FormatArg::Carmen => LogFormat::Carmen,
+            FormatArg::Ros1 => LogFormat::Ros1Bag,
+            FormatArg::Ros2 => LogFormat::Ros2Bag,
+            FormatArg::Mcap => LogFormat::Mcap,
+            FormatArg::Json => LogFormat::Json,
+            FormatArg::Csv => LogFormat::Csv,
+        });
+        options.topic = self.topic.clone();
+        options.carmen.fov_rad = self.fov.map(f64::to_radians);
+        options.carmen.max_range_m = self.max_range;
+        Ok(options)
     }
 }

@@ -132,13 +132,11 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     })?;
     let sensor = args.input.sensor(&args.log, config.sensor)?;
     let mount = args.mount.unwrap_or(config.vehicle_from_sensor);
-    let mut mapper = Mapper::new(MapperConfig {
-        detector: config.detector_for(sensor),
-        map: config.map,
-        aiding: aiding_config,
-        loop_closure: (!args.no_loop_closure).then_some(config.loop_closure),
-        vehicle_from_sensor: mount,
-    })?;
+    let mut mapper = Mapper::new(
+        MapperConfig::new(config.detector_for(sensor), config.map, aiding_config)
+            .with_loop_closure((!args.no_loop_closure).then_some(config.loop_closure))
+            .with_mount(mount),
+    )?;
     let bar = progress::spinner("scans", quiet);
     let mut poses: Vec<PoseOut> = Vec::new();
     let mut without_odometry = 0;

@@ -253,7 +253,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     let modes: Vec<ModeSummary> = Loop::ALL
         .iter()
         .zip(&scores)
-        .map(|(mode, AidedScore { errors: e, map: q })| ModeSummary {
+        .map(|(mode, AidedScore { errors: e, map: q, .. })| ModeSummary {
             mode: mode.label(),
             heading_rms_deg: e.heading_rms_rad.to_degrees(),
             heading_max_deg: e.heading_max_rad.to_degrees(),

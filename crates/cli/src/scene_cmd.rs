@@ -96,22 +96,18 @@ pub struct GenerateArgs {
 pub fn run(cmd: &SceneCommand, quiet: bool) -> Result<()> {
     match cmd {
         SceneCommand::Generate(a) => {
-            let config = MazeConfig {
-                name: a.name.clone(),
-                cols: a.cols,
-                rows: a.rows,
-                cell_m: a.cell_m,
-                walls: match a.walls {
-                    Walls::Single => WallStyle::Single,
-                    Walls::Double => WallStyle::Double { thickness_m: a.thickness_m },
-                },
-                loop_probability: a.loops,
-                room_probability: a.rooms,
-                doorway_m: (a.doorway_m > 0.0).then_some(a.doorway_m),
-                clutter: a.clutter,
-                speed_m_s: a.speed,
-                max_waypoints: a.max_waypoints,
+            let mut config = MazeConfig::small(&a.name).with_grid(a.cols, a.rows);
+            config.cell_m = a.cell_m;
+            config.walls = match a.walls {
+                Walls::Single => WallStyle::Single,
+                Walls::Double => WallStyle::Double { thickness_m: a.thickness_m },
             };
+            config.loop_probability = a.loops;
+            config.room_probability = a.rooms;
+            config.doorway_m = (a.doorway_m > 0.0).then_some(a.doorway_m);
+            config.clutter = a.clutter;
+            config.speed_m_s = a.speed;
+            config.max_waypoints = a.max_waypoints;
             let scene = generate_maze(&config, a.seed).map_err(|e| BadInput(e.to_string()))?;
             write_scene(&a.output, &scene)?;
             if !quiet {

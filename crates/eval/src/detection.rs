@@ -14,6 +14,7 @@ use pcaline_sim::{SimFrame, World};
 
 /// The matching rule.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct DetectionCriteria {
     /// Fewest beams of a true visible wall (10).
     pub min_beams: usize,
@@ -93,6 +94,7 @@ pub fn matches(truth: &LineSegment, detected: &LineSegment, criteria: &Detection
 
 /// Counts over any number of scans.
 #[derive(Debug, Clone, Default, PartialEq)]
+#[non_exhaustive]
 pub struct DetectionScore {
     /// Scans scored.
     pub scans: usize,

@@ -73,6 +73,7 @@ impl FaultMode {
 
 /// What to evaluate on.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct DetectionEval {
     /// Range noise sigma of the simulated sensor, metres.
     pub sigma_m: f64,
@@ -91,8 +92,26 @@ pub struct DetectionEval {
     pub criteria: DetectionCriteria,
 }
 
+impl DetectionEval {
+    /// `scans` scans per scene and seed, seeds 1 to `seeds`, range noise
+    /// `sigma_m`; no range grid, no faults, level scans without motion skew,
+    /// and the default matching rule ([`DetectionCriteria::default`]).
+    pub fn new(sigma_m: f64, seeds: u64, scans: usize) -> Self {
+        DetectionEval {
+            sigma_m,
+            range_resolution_m: 0.0,
+            faults: FaultMode::Off,
+            keep_motion: false,
+            seeds,
+            scans,
+            criteria: DetectionCriteria::default(),
+        }
+    }
+}
+
 /// The score of one detector and its time per scan.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct DetectorResult {
     /// The score.
     pub score: DetectionScore,
@@ -212,18 +231,8 @@ mod tests {
     /// else; a detector that finds nothing scores recall 0.
     #[test]
     fn the_noise_free_oracle_scores_perfectly() {
-        let scene =
-            generate_maze(&MazeConfig { max_waypoints: Some(4), ..MazeConfig::small("t") }, 2)
-                .unwrap();
-        let eval = DetectionEval {
-            sigma_m: 0.0,
-            range_resolution_m: 0.0,
-            faults: FaultMode::Off,
-            keep_motion: false,
-            seeds: 1,
-            scans: 10,
-            criteria: DetectionCriteria::default(),
-        };
+        let scene = generate_maze(&MazeConfig::small("t").with_max_waypoints(4), 2).unwrap();
+        let eval = DetectionEval::new(0.0, 1, 10);
         let criteria = eval.criteria;
         let mut oracle =
             |f: &SimFrame, w: &World| oracle_lines(f, w, &criteria, 0.0, f64::INFINITY);

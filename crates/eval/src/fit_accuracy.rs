@@ -16,6 +16,7 @@ use rand_distr::{Distribution, Normal};
 
 /// One wall setting.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct FitAccuracy {
     /// Points.
     pub n: usize,
@@ -99,6 +100,7 @@ pub fn fit_accuracy(n: usize, length_m: f64, sigma_m: f64, runs: usize, seed: u6
 /// Accuracy and consistency of the unweighted (PCA) and the weighted fit
 /// (Pfister et al.) under range-and-bearing noise, by Monte Carlo.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct RangeBearingAccuracy {
     /// Beams on the wall.
     pub n: usize,

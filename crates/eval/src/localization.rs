@@ -62,6 +62,7 @@ impl<E> From<ConfigError> for ObservedRunError<E> {
 
 /// One loop's score.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct AidedScore {
     /// Trajectory errors against the true poses.
     pub errors: TrajectoryErrors,
@@ -186,11 +187,8 @@ mod tests {
     /// remove the odometry drift and map only true walls.
     #[test]
     fn perfect_lines_let_full_pose_aiding_remove_the_drift() {
-        let mut scene = generate_maze(
-            &MazeConfig { max_waypoints: Some(6), ..MazeConfig::small("eval-test") },
-            3,
-        )
-        .unwrap();
+        let mut scene =
+            generate_maze(&MazeConfig::small("eval-test").with_max_waypoints(6), 3).unwrap();
         scene.sensor.range_sigma_m = Some(0.0);
         scene.sensor.motion_skew = false;
         scene.odometry.heading_rate_bias_deg_s = 0.3;

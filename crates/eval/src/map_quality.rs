@@ -73,6 +73,7 @@ fn bins(w: &Wall, bin_m: f64) -> usize {
 
 /// How a map compares with the true walls.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct MapQuality {
     /// Number of map lines.
     pub lines: usize,

@@ -51,6 +51,7 @@ impl StampedTrajectory {
 /// both meet a pose, the error `e = relative⁻¹ ∘ (pose(t1)⁻¹ ∘ pose(t2))`,
 /// its translational part `|(e.x, e.y)|` and its rotational part `|e.heading|`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct RelationErrors {
     /// Relations scored.
     pub relations: usize,

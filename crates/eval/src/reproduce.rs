@@ -101,6 +101,7 @@ pub const TABLE3: [FitRow; 4] = [
 
 /// Our result for a row.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct FitRowResult {
     /// The row.
     pub row: FitRow,
@@ -233,6 +234,7 @@ pub const ETH_EXPERIMENTS: [EthExperiment; 2] = [
 
 /// Our result of an `ETh` experiment.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct EthResult {
     /// The experiment.
     pub experiment: EthExperiment,

@@ -4,6 +4,7 @@ use pcaline_geometry::{Pose2, wrap_angle};
 
 /// Heading and position errors of a trajectory.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct TrajectoryErrors {
     /// Root mean square heading error, radians.
     pub heading_rms_rad: f64,

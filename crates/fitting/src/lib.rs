@@ -53,6 +53,7 @@ use pcaline_geometry::ConfigError;
 /// Configuration of the fitting stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct FitConfig {
     /// The eigenvalue-ratio threshold `ETh`: a piece is a line when
     /// `lambda_max / lambda_min > eth` (paper: 50). Must be > 1.
@@ -90,6 +91,23 @@ pub struct FitConfig {
 }
 
 impl FitConfig {
+    /// The fitting of the established split-and-merge extractors, as a
+    /// baseline: `ETh` 50, sub-clusters of 5 points or more, neighbours
+    /// merged within 2°, and no further test.
+    pub fn split_and_merge() -> Self {
+        FitConfig {
+            eth: 50.0,
+            min_points: 5,
+            merge: MergeRule::Angles { alpha_t_rad: 2f64.to_radians() },
+            corner_window: 0,
+            residual_test: None,
+            min_line_points: 0,
+            min_line_length_m: 0.0,
+            orientation_test: None,
+            straightness_test: None,
+        }
+    }
+
     /// Exactly the paper's values: `ETh` 50, eq. 7 with `alpha_T` 0.05°, and
     /// sub-clusters of 3 points or more fitted.
     pub fn paper() -> Self {

@@ -20,7 +20,7 @@ use pcaline_geometry::RangeNoise;
 /// ```
 /// use pcaline_fitting::{Moments, OrientationTest};
 /// use pcaline_geometry::{Point2, RangeNoise};
-/// let test = OrientationTest { max_std_rad: 1f64.to_radians(), noise: RangeNoise::constant(0.01) };
+/// let test = OrientationTest::new(1f64.to_radians(), RangeNoise::constant(0.01));
 /// let wall = |n: usize, len: f64| -> Moments {
 ///     Moments::from_points(&(0..n).map(|i| Point2::new(3.0, len * i as f64 / (n - 1) as f64)).collect::<Vec<_>>())
 /// };
@@ -30,6 +30,7 @@ use pcaline_geometry::RangeNoise;
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct OrientationTest {
     /// Largest predicted orientation standard deviation, radians.
     pub max_std_rad: f64,
@@ -38,6 +39,12 @@ pub struct OrientationTest {
 }
 
 impl OrientationTest {
+    /// Accepts a line whose orientation standard deviation under range
+    /// noise `noise` is at most `max_std_rad` radians.
+    pub const fn new(max_std_rad: f64, noise: RangeNoise) -> Self {
+        OrientationTest { max_std_rad, noise }
+    }
+
     /// The predicted orientation standard deviation of the line through the
     /// points with `moments`, radians (`inf` for fewer than 2 points or no
     /// spread).

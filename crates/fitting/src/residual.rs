@@ -17,6 +17,7 @@ use pcaline_geometry::RangeNoise;
 /// probability below 1e-5 for 5 points and far less for more.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ResidualTest {
     /// Largest residual std, in range-noise sigmas.
     pub max_sigmas: f64,
@@ -25,6 +26,12 @@ pub struct ResidualTest {
 }
 
 impl ResidualTest {
+    /// Accepts a piece whose residual standard deviation is at most
+    /// `max_sigmas` range-noise sigmas of `noise`.
+    pub const fn new(max_sigmas: f64, noise: RangeNoise) -> Self {
+        ResidualTest { max_sigmas, noise }
+    }
+
     /// True when the piece with `moments` (and their eigen decomposition) is
     /// consistent with the noise. Pieces of 2 points or fewer have no
     /// residual to test and are accepted.
@@ -32,7 +39,7 @@ impl ResidualTest {
     /// ```
     /// use pcaline_fitting::{Moments, ResidualTest};
     /// use pcaline_geometry::{Point2, RangeNoise};
-    /// let test = ResidualTest { max_sigmas: 3.0, noise: RangeNoise::constant(0.01) };
+    /// let test = ResidualTest::new(3.0, RangeNoise::constant(0.01));
     /// let wall: Vec<_> = (0..10).map(|i| Point2::new(2.0, 0.1 * i as f64 + if i % 2 == 0 { 0.0 } else { 0.0 })).collect();
     /// let m = Moments::from_points(&wall);
     /// assert!(test.accepts(&m, &m.eigen()));

@@ -127,6 +127,7 @@ fn runs_z(positive: usize, negative: usize, runs: usize) -> f64 {
 /// short noisy wall can bow by chance with random signs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct StraightnessTest {
     /// The largest bow still kept, in noise sigmas at the line's range.
     pub max_bow_sigmas: f64,
@@ -135,6 +136,12 @@ pub struct StraightnessTest {
 }
 
 impl StraightnessTest {
+    /// Keeps a line unless its bow exceeds `max_bow_sigmas` noise sigmas and
+    /// its runs z lies below `max_runs_z` (see [`StraightnessTest::accepts`]).
+    pub const fn new(max_bow_sigmas: f64, max_runs_z: f64) -> Self {
+        StraightnessTest { max_bow_sigmas, max_runs_z }
+    }
+
     /// A bow above 2 sigmas with runs z below -3 (one straight wall in 700
     /// with white residuals fails the runs test alone). A chord bowing by
     /// 2 sigmas lies about 0.6 sigma (rms) from its surface.

@@ -10,6 +10,7 @@ use crate::ConfigError;
 /// covariance use this model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct RangeNoise {
     /// Sigma in metres for ranges below `far_from_m`.
     pub near_sigma_m: f64,

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 
 /// Options of the CARMEN reader.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct CarmenOptions {
     /// Field of view for `FLASER` lines, radians; `None` infers it from the
     /// beam count (180: 180° in 1° steps from -90°; 181: 180° with both ends;

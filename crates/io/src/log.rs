@@ -27,6 +27,7 @@ pub enum LogFormat {
 
 /// Options of [`read_log`].
 #[derive(Debug, Clone, Default)]
+#[non_exhaustive]
 pub struct LogOptions {
     /// The format; detected from the file when `None`.
     pub format: Option<LogFormat>,

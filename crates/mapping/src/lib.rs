@@ -40,6 +40,7 @@ use pcaline_geometry::ConfigError;
 /// Configuration of a [`LineMap`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct MapConfig {
     /// Largest orientation difference of a match, radians (paper: 15°).
     pub max_d_alpha_rad: f64,
@@ -90,6 +91,7 @@ pub struct MapConfig {
 /// new line are tested).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct MergeGate {
     /// Largest distance of an endpoint from the map line, metres: a wall's
     /// 10 cm end face beside a box face must not bend the box's line.

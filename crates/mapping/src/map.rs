@@ -196,6 +196,7 @@ pub struct Match {
 /// configuration, or wider ones an estimator derives from its pose
 /// uncertainty ([`LineMap::for_each_candidate`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct MatchGate {
     /// Largest orientation difference, radians.
     pub max_d_alpha_rad: f64,
@@ -206,6 +207,13 @@ pub struct MatchGate {
 }
 
 impl MatchGate {
+    /// Gates of at most `max_d_alpha_rad` radians of orientation difference,
+    /// `max_d_rho_m` metres of `d_rho` and, when given, `max_offset_m` metres
+    /// of the new centroid from the map line.
+    pub fn new(max_d_alpha_rad: f64, max_d_rho_m: f64, max_offset_m: Option<f64>) -> Self {
+        MatchGate { max_d_alpha_rad, max_d_rho_m, max_offset_m }
+    }
+
     /// The gates of a map configuration.
     pub fn of(config: &MapConfig) -> Self {
         MatchGate {

@@ -192,6 +192,7 @@ pub enum Level2Rule {
 /// Configuration of the segmentation stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct SegmentationConfig {
     /// Level-1 break-point rule.
     pub level1: BreakRule,
@@ -219,6 +220,22 @@ impl SegmentationConfig {
             level1: BreakRule::adaptive(noise),
             min_cluster_points: 5,
             level2: Level2Rule::SplitAtFarthest { sigma_factor: 4.0, min_distance_m: 0.0, noise },
+        }
+    }
+
+    /// The segmentation of the established split-and-merge extractors, as a
+    /// baseline: a fixed 0.15 m break-point distance, clusters under 5
+    /// points dropped, and a recursive split at a fixed 5 cm from the chord
+    /// (thresholds in metres, not following the noise).
+    pub const fn split_and_merge() -> Self {
+        SegmentationConfig {
+            level1: BreakRule::Fixed { dth_m: 0.15 },
+            min_cluster_points: 5,
+            level2: Level2Rule::SplitAtFarthest {
+                sigma_factor: 1.0,
+                min_distance_m: 0.05,
+                noise: RangeNoise::constant(0.0),
+            },
         }
     }
 

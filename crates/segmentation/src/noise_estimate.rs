@@ -25,6 +25,7 @@ use pcaline_geometry::{ConfigError, RangeNoise, ScanPoints};
 /// How the range noise is estimated from each scan.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct NoiseEstimation {
     /// Fewest triples a range band needs for its sigma to be estimated; a
     /// band with fewer keeps the nominal sigma.
@@ -141,6 +142,7 @@ const MAX_TRIPLES: usize = 256;
 
 /// What [`estimate_range_noise`] found.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct NoiseEstimate {
     /// The range noise the thresholds use: the nominal with each band's
     /// sigma replaced by the scan's estimate where the band had enough

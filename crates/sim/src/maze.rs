@@ -21,6 +21,7 @@ pub enum WallStyle {
 
 /// Parameters of a generated maze.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct MazeConfig {
     /// Scene name.
     pub name: String,
@@ -64,6 +65,16 @@ impl MazeConfig {
             speed_m_s: 1.0,
             max_waypoints: None,
         }
+    }
+
+    /// The same maze with `cols` x `rows` cells.
+    pub fn with_grid(self, cols: usize, rows: usize) -> Self {
+        MazeConfig { cols, rows, ..self }
+    }
+
+    /// The same maze with the tour stopped after `waypoints` waypoints.
+    pub fn with_max_waypoints(self, waypoints: usize) -> Self {
+        MazeConfig { max_waypoints: Some(waypoints), ..self }
     }
 
     fn validate(&self) -> Result<(), ConfigError> {

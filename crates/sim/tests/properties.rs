@@ -6,7 +6,8 @@ use pcaline_sim::{Fault, MazeConfig, Scene, Simulator, WallStyle, generate_maze}
 use proptest::prelude::*;
 
 fn maze(seed: u64, walls: WallStyle) -> Scene {
-    let config = MazeConfig { walls, cols: 4, rows: 3, ..MazeConfig::small("prop") };
+    let mut config = MazeConfig::small("prop").with_grid(4, 3);
+    config.walls = walls;
     generate_maze(&config, seed).unwrap()
 }
 
