@@ -96,15 +96,9 @@ impl FitConfig {
     /// merged within 2°, and no further test.
     pub fn split_and_merge() -> Self {
         FitConfig {
-            eth: 50.0,
             min_points: 5,
             merge: MergeRule::Angles { alpha_t_rad: 2f64.to_radians() },
-            corner_window: 0,
-            residual_test: None,
-            min_line_points: 0,
-            min_line_length_m: 0.0,
-            orientation_test: None,
-            straightness_test: None,
+            ..FitConfig::paper()
         }
     }
 
