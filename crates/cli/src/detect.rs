@@ -54,8 +54,8 @@ const SCANS_PER_TASK: usize = 16;
 
 /// Detects and encodes the scans of `batch`, the first of which is scan
 /// `first` of the log, on every thread of the pool: for each scan, in
-/// order, its record as `format` encodes it and (with `keep_lines`) its
-/// lines. Each task detects with its own copy of `detector`, and a scan's
+/// order, its record as `format` encodes it, its number of lines, and (with
+/// `keep_lines`) the lines. Each task detects with its own copy of `detector`, and a scan's
 /// lines do not depend on the scans before it, so the result is the same
 /// byte for byte whatever the number of threads.
 fn detect_batch(
@@ -64,7 +64,7 @@ fn detect_batch(
     first: usize,
     format: LinesFormat,
     keep_lines: bool,
-) -> Vec<(Vec<u8>, Vec<LineSegment>)> {
+) -> Vec<(Vec<u8>, usize, Vec<LineSegment>)> {
     batch
         .par_chunks(SCANS_PER_TASK)
         .enumerate()
@@ -85,7 +85,7 @@ fn detect_batch(
                     } else {
                         Vec::new()
                     };
-                    (body, lines)
+                    (body, d.lines.len(), lines)
                 })
                 .collect::<Vec<_>>()
         })
@@ -189,8 +189,8 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
         &args.file,
         &args.log.options()?,
         |first, batch| detect_batch(&detector, batch, first, format, keep_lines),
-        |s, (body, lines)| {
-            lines_total += lines.len();
+        |s, (body, n_lines, lines)| {
+            lines_total += n_lines;
             if let Some(m) = mcap.as_mut() {
                 let stamp = m.stamp(s.scan.stamp_s);
                 let pose = [(PoseKind::SensorFromLog, s.pose.or(s.odometry))];

@@ -94,3 +94,19 @@ fn real_data_eval_does_not_depend_on_the_threads() {
     let args = ["eval", "--real", "--json", "--data", s(&data)];
     assert!(with_threads(1, &args) == with_threads(2, &args), "eval --real differs");
 }
+
+#[test]
+fn detect_counts_every_line_in_its_summary() {
+    // The count on stderr is the sum of the lines written, with and without
+    // --mcap (the lines themselves are kept only for the MCAP file).
+    let Some(log) = data("intel/intel.gfs.log") else { return };
+    let out = pcaline(&["detect", s(&log)]);
+    assert!(out.status.success());
+    let written: usize = common::json_lines(&out.stdout)
+        .iter()
+        .map(|scan| scan["lines"].as_array().unwrap().len())
+        .sum();
+    assert!(written > 1000, "{written} lines");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("910 scans, {written} lines")), "{err}");
+}
