@@ -481,16 +481,54 @@ impl Aiding {
             report.fallback = Some(Fallback::NoMatches);
             return (predicted, report, true);
         }
+        let gated = self.gate(&predicted, &predicted_cov, lines, &mut report);
+        if gated.is_empty() {
+            report.fallback = Some(Fallback::NoMatches);
+            return (predicted, report, true);
+        }
+        let consistent = self.check_jointly(gated, &predicted_cov, lines, &mut report);
+        if consistent.len() < self.config.estimator.min_matches.max(1) {
+            report.fallback = Some(Fallback::NoMatches);
+            return (predicted, report, true);
+        }
+        let e = &self.config.estimator;
+        let (map, r_scale) = (&self.map, self.measurement_noise_scale);
+        let update = iterated_update(&predicted, &predicted_cov, e.iterations, e.huber_k, |pose| {
+            consistent
+                .iter()
+                .map(|&(i, j)| {
+                    match_measurement(lines[i].line(), &map.lines()[j], pose, e, r_scale)
+                })
+                .collect()
+        });
+        let Some(update) = update else {
+            report.fallback = Some(Fallback::NonFiniteCorrection);
+            return (predicted, report, true);
+        };
+        self.accept(update, &predicted, &predicted_cov, &consistent, lines, report)
+    }
+
+    /// Step 1 of [`Aiding::estimate`]: each line's best map line within
+    /// gates from the predicted covariance (Mahalanobis), leaving out lines
+    /// whose gate holds two map lines that would correct the pose
+    /// differently. Returns `(line index, map index, measurement at the
+    /// prediction)`; records every line's outcome.
+    fn gate(
+        &mut self,
+        predicted: &Pose2,
+        predicted_cov: &Matrix3<f64>,
+        lines: &[impl ObservedLine],
+        report: &mut StepReport,
+    ) -> Vec<(usize, usize, LineMeasurement)> {
         let e = self.config.estimator;
         let r_scale = self.measurement_noise_scale;
         let viewpoint = Point2::new(predicted.x, predicted.y);
         let sigma_heading = predicted_cov[(2, 2)].max(0.0).sqrt();
         let sigma_position = (predicted_cov[(0, 0)] + predicted_cov[(1, 1)]).max(0.0).sqrt();
         let map_gate = MatchGate::of(self.map.config());
-        // Gated matches: (line index, map index, measurement at the prediction).
         let mut gated: Vec<(usize, usize, LineMeasurement)> = Vec::new();
         for (i, (sensor, (world, _))) in
-            lines.iter().zip(self.world_lines(&predicted, lines)).enumerate()
+            lines.iter().zip(self.world_lines(predicted, lines)).enumerate()
         {
             let lever = (world.centroid - viewpoint).norm();
             let offset_gate = (3.5 * (sigma_position + lever * sigma_heading))
@@ -510,12 +548,8 @@ impl Aiding {
                     unconfirmed = true;
                     return;
                 }
-                let mut meas = measure(sensor.line(), map_line, &predicted, &e.measurement);
-                meas.covariance *= r_scale;
-                if tentative {
-                    meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
-                }
-                let d2 = gate_distance2(&meas, &predicted_cov);
+                let meas = match_measurement(sensor.line(), map_line, predicted, &e, r_scale);
+                let d2 = gate_distance2(&meas, predicted_cov);
                 if d2 <= e.gate_chi2 {
                     in_gate.push(meas);
                 }
@@ -549,45 +583,51 @@ impl Aiding {
             };
             self.associations.push(Association { line: i, map_line, outcome });
         }
-        if gated.is_empty() {
-            report.fallback = Some(Fallback::NoMatches);
-            return (predicted, report, true);
-        }
-        // Joint consistency, hypotheses from the matches with the most points first.
+        gated
+    }
+
+    /// Step 2 of [`Aiding::estimate`]: the gated matches that agree with
+    /// one another (hypotheses from the matches with the most points
+    /// first). Returns `(line index, map index)`; marks the others
+    /// [`MatchOutcome::Inconsistent`].
+    fn check_jointly(
+        &mut self,
+        mut gated: Vec<(usize, usize, LineMeasurement)>,
+        predicted_cov: &Matrix3<f64>,
+        lines: &[impl ObservedLine],
+        report: &mut StepReport,
+    ) -> Vec<(usize, usize)> {
         gated.sort_by_key(|(i, _, _)| std::cmp::Reverse(lines[*i].line().n_points));
         let measurements: Vec<LineMeasurement> = gated.iter().map(|g| g.2).collect();
-        let flags = joint_consistent(&measurements, &predicted_cov, e.consensus_chi2, 12);
-        let consistent: Vec<(usize, usize)> =
-            gated.iter().zip(&flags).filter(|(_, f)| **f).map(|(g, _)| (g.0, g.1)).collect();
+        let flags = joint_consistent(
+            &measurements,
+            predicted_cov,
+            self.config.estimator.consensus_chi2,
+            12,
+        );
         for ((i, _, _), ok) in gated.iter().zip(&flags) {
             if !ok {
                 report.rejected_joint += 1;
                 self.associations[*i].outcome = MatchOutcome::Inconsistent;
             }
         }
-        if consistent.len() < e.min_matches.max(1) {
-            report.fallback = Some(Fallback::NoMatches);
-            return (predicted, report, true);
-        }
-        let map = &self.map;
-        let update = iterated_update(&predicted, &predicted_cov, e.iterations, e.huber_k, |pose| {
-            consistent
-                .iter()
-                .map(|&(i, j)| {
-                    let map_line = &map.lines()[j];
-                    let mut meas = measure(lines[i].line(), map_line, pose, &e.measurement);
-                    meas.covariance *= r_scale;
-                    if map_line.status == LineStatus::Tentative {
-                        meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
-                    }
-                    meas
-                })
-                .collect()
-        });
-        let Some(update) = update else {
-            report.fallback = Some(Fallback::NonFiniteCorrection);
-            return (predicted, report, true);
-        };
+        gated.iter().zip(&flags).filter(|(_, f)| **f).map(|(g, _)| (g.0, g.1)).collect()
+    }
+
+    /// Step 3 of [`Aiding::estimate`]: the noise adaptation learns from the
+    /// update; the innovation test refuses a correction inconsistent with
+    /// the source (the prediction kept, its covariance inflated, the lines
+    /// kept out of the map); an accepted one teaches the calibration.
+    fn accept(
+        &mut self,
+        update: crate::PoseUpdate,
+        predicted: &Pose2,
+        predicted_cov: &Matrix3<f64>,
+        consistent: &[(usize, usize)],
+        lines: &[impl ObservedLine],
+        mut report: StepReport,
+    ) -> (Pose2, StepReport, bool) {
+        let e = self.config.estimator;
         report.correction_distance2 = update.correction_distance2;
         if let Some(a) = e.adaptation {
             self.motion_noise_scale =
@@ -602,10 +642,10 @@ impl Aiding {
             let inflation = (update.correction_distance2 / e.innovation_chi2).min(e.max_inflation);
             self.covariance = predicted_cov * inflation;
             report.fallback = Some(Fallback::InconsistentWithSource);
-            for &(i, _) in &consistent {
+            for &(i, _) in consistent {
                 self.associations[i].outcome = MatchOutcome::Refused;
             }
-            return (predicted, report, false);
+            return (*predicted, report, false);
         }
         report.matches = consistent.len();
         self.last_consistent = consistent
@@ -615,18 +655,20 @@ impl Aiding {
         report.heading_correction_rad =
             pcaline_geometry::wrap_angle(update.pose.heading - predicted.heading);
         if let Some(c) = e.calibration {
+            // Known defect (docs/accuracy.md): the translation correction is
+            // still zero here, so the speed scale does not learn.
             self.calibration.observe(
                 &c,
                 self.step_dt(),
                 &self.step_world,
                 (&report.translation_correction_m, report.heading_correction_rad),
-                &predicted_cov,
+                predicted_cov,
                 &update.covariance,
             );
         }
         report.translation_correction_m =
             Vector2::new(update.pose.x - predicted.x, update.pose.y - predicted.y);
-        report.constrained_directions = constrained_directions(&update.covariance, &predicted_cov);
+        report.constrained_directions = constrained_directions(&update.covariance, predicted_cov);
         self.covariance = update.covariance;
         (update.pose, report, true)
     }
@@ -648,19 +690,12 @@ impl Aiding {
         };
         let window = self.window.get_or_insert_with(|| PoseWindow::new(prev, previous_cov, size));
         let e = self.config.estimator;
-        let (r_scale, tentative) = (self.measurement_noise_scale, e.tentative_variance_scale);
+        let r_scale = self.measurement_noise_scale;
         let matches = std::mem::take(&mut self.last_consistent);
         let measure = move |pose: &Pose2| -> Vec<LineMeasurement> {
             matches
                 .iter()
-                .map(|(sensor, map_line)| {
-                    let mut m = measure(sensor, map_line, pose, &e.measurement);
-                    m.covariance *= r_scale;
-                    if map_line.status == LineStatus::Tentative {
-                        m.covariance *= tentative.unwrap_or(1.0);
-                    }
-                    m
-                })
+                .map(|(sensor, map_line)| match_measurement(sensor, map_line, pose, &e, r_scale))
                 .collect()
         };
         let oldest = window.oldest_covariance;
@@ -783,6 +818,25 @@ impl Aiding {
         }
         (pose, report)
     }
+}
+
+/// One match's measurement as the estimator weighs it: [`measure`], times
+/// the measurement noise's factor, times
+/// [`crate::EstimatorConfig::tentative_variance_scale`] for a tentative map
+/// line.
+fn match_measurement(
+    sensor: &LineSegment,
+    map_line: &MapLine,
+    pose: &Pose2,
+    e: &crate::EstimatorConfig,
+    noise_scale: f64,
+) -> LineMeasurement {
+    let mut meas = measure(sensor, map_line, pose, &e.measurement);
+    meas.covariance *= noise_scale;
+    if map_line.status == LineStatus::Tentative {
+        meas.covariance *= e.tentative_variance_scale.unwrap_or(1.0);
+    }
+    meas
 }
 
 /// Whether two candidate matches of one line would correct the pose alike:

@@ -564,11 +564,24 @@ impl LoopClosing {
 
     /// Looks for loops from keyframe `current`; returns the edges added.
     fn close_loops(&mut self, current: usize) -> usize {
+        let chosen = self.loop_candidates(current);
+        if chosen.is_empty() {
+            return 0;
+        }
+        let Some((j, a, see_through)) = self.verify_candidates(current, chosen) else { return 0 };
+        self.confirm_loop(current, j, a, see_through)
+    }
+
+    /// Step 1 of loop closing: keyframes at least
+    /// [`LoopClosureConfig::min_loop_path_m`] of travel back whose graph
+    /// pose lies within the search radius (the relative pose's uncertainty
+    /// along the chain), nearest first, one per stretch of
+    /// `submap_keyframes`, at most `max_candidates`. Returns `(keyframe,
+    /// search radius m, search rotation rad)`.
+    fn loop_candidates(&self, current: usize) -> Vec<(usize, f64, f64)> {
         let c = self.config;
         let here = self.graph.nodes[current];
         let path_here = self.keyframes[current].path_m;
-        // Candidates within the search radius, nearest first, one per
-        // stretch of `submap_keyframes`.
         let kf = &self.keyframes[current];
         let mut candidates: Vec<(f64, usize, f64, f64)> = (0..current)
             .filter_map(|j| {
@@ -601,9 +614,21 @@ impl LoopClosing {
                 chosen.push((j, radius, rotation));
             }
         }
-        if chosen.is_empty() {
-            return 0;
-        }
+        chosen
+    }
+
+    /// Step 2: each candidate's local lines aligned with the current
+    /// keyframe's (within the search prior) and tested (matched length,
+    /// constrained directions, residual, ambiguity, walls seen through);
+    /// the refused ones recorded. Returns the accepted alignment with the
+    /// longest matched length and its see-through fraction.
+    fn verify_candidates(
+        &mut self,
+        current: usize,
+        chosen: Vec<(usize, f64, f64)>,
+    ) -> Option<(usize, Alignment, f64)> {
+        let c = self.config;
+        let here = self.graph.nodes[current];
         let first = current.saturating_sub(c.submap_keyframes);
         let current_seen = self.local_lines(current, first..=current);
         let current_lines: Vec<LineSegment> = current_seen.iter().map(|(l, _)| *l).collect();
@@ -660,7 +685,15 @@ impl LoopClosing {
                 best = Some((j, a, see_through));
             }
         }
-        let Some((j, a, see_through)) = best else { return 0 };
+        best
+    }
+
+    /// Step 3: the verified loop waits for a second, from another of the
+    /// last keyframes, that asks for the same correction; once confirmed,
+    /// both become edges of the graph. Returns the edges added.
+    fn confirm_loop(&mut self, current: usize, j: usize, a: Alignment, see_through: f64) -> usize {
+        let c = self.config;
+        let here = self.graph.nodes[current];
         // The correction the loop asks of the graph, in the current
         // keyframe's frame.
         let predicted = self.graph.nodes[j].between(&here);
