@@ -682,6 +682,28 @@ fn print_detection(rows: &[Row], compare: bool) -> anyhow::Result<()> {
 
 fn print_real(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
     outln!("configuration: {}", r.config)?;
+    print_csail(r)?;
+    outln!()?;
+    print_intel(r)?;
+    outln!()?;
+    print_own_poses(r)?;
+    if !r.drift_grid.is_empty() {
+        outln!()?;
+        print_drift_grid(&r.drift_grid)?;
+    }
+    outln!()?;
+    print_utm(&r.utm)?;
+    outln!()?;
+    outln!("Detection on every shared log (scans with walls in view: 20 valid returns or more)")?;
+    print_detection_stats(&r.detection)?;
+    outln!()?;
+    outln!("The same, on each log's own sensor profile (--sensor)")?;
+    print_detection_stats(&r.detection_with_sensor)?;
+    Ok(())
+}
+
+/// MIT CSAIL's raw and aided odometry against its corrected poses.
+fn print_csail(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
     outln!(
         "MIT CSAIL: {} scans with corrected poses; absolute errors after aligning at the first, and after the least-squares rigid alignment of all (rigid); relation metric between consecutive corrected scans",
         r.csail_pairs
@@ -715,7 +737,11 @@ fn print_real(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             t.relations.rotation_std_deg
         )?;
     }
-    outln!()?;
+    Ok(())
+}
+
+/// Intel's drifted and aided trajectories by the relation metric.
+fn print_intel(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
     outln!(
         "Intel: relation metric against intel.relations (drift seed {}; mean ± std)",
         r.intel_drift_seed
@@ -740,7 +766,11 @@ fn print_real(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             t.relations.rotation_std_deg
         )?;
     }
-    outln!()?;
+    Ok(())
+}
+
+/// How far each mode moves a log's own corrected poses.
+fn print_own_poses(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
     outln!("Own corrected poses as the source: how far each mode moves them (aided minus source)")?;
     outln!(
         "{:<22} {:<26} {:>11} {:>11} {:>9} {:>17} {:>17}",
@@ -770,38 +800,43 @@ fn print_real(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             rot
         )?;
     }
-    if !r.drift_grid.is_empty() {
-        outln!()?;
-        outln!("Intel drift grid: corrected poses + synthetic drift, against the corrected poses")?;
+    Ok(())
+}
+
+/// The Intel drift grid, cell by cell.
+fn print_drift_grid(grid: &[crate::eval_real::DriftCell]) -> anyhow::Result<()> {
+    outln!("Intel drift grid: corrected poses + synthetic drift, against the corrected poses")?;
+    outln!(
+        "{:>10} {:>6} {:>5}  {:<26} {:>11} {:>9} {:>17} {:>17}",
+        "bias °/s",
+        "speed",
+        "seed",
+        "mode",
+        "heading rms",
+        "pos rms",
+        "rel. trans (m)",
+        "rel. rot (deg)"
+    )?;
+    for c in grid {
         outln!(
-            "{:>10} {:>6} {:>5}  {:<26} {:>11} {:>9} {:>17} {:>17}",
-            "bias °/s",
-            "speed",
-            "seed",
-            "mode",
-            "heading rms",
-            "pos rms",
-            "rel. trans (m)",
-            "rel. rot (deg)"
+            "{:>10.1} {:>5.0}% {:>5}  {:<26} {:>9.3} ° {:>7.3} m {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
+            c.heading_rate_bias_deg_s,
+            100.0 * c.speed_scale_error,
+            c.seed,
+            c.mode,
+            c.heading_rms_deg,
+            c.position_rms_m,
+            c.relations.translation_mean_m,
+            c.relations.translation_std_m,
+            c.relations.rotation_mean_deg,
+            c.relations.rotation_std_deg
         )?;
-        for c in &r.drift_grid {
-            outln!(
-                "{:>10.1} {:>5.0}% {:>5}  {:<26} {:>9.3} ° {:>7.3} m {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
-                c.heading_rate_bias_deg_s,
-                100.0 * c.speed_scale_error,
-                c.seed,
-                c.mode,
-                c.heading_rms_deg,
-                c.position_rms_m,
-                c.relations.translation_mean_m,
-                c.relations.translation_std_m,
-                c.relations.rotation_mean_deg,
-                c.relations.rotation_std_deg
-            )?;
-        }
     }
-    outln!()?;
-    let u = &r.utm;
+    Ok(())
+}
+
+/// The UTM-30LX-EW bag: its lines and the LIDAR-only sharpness.
+fn print_utm(u: &crate::eval_real::ResidualReport) -> anyhow::Result<()> {
     let [p10, p50, p90] = u.residual_std_p10_p50_p90_m;
     outln!(
         "UTM-30LX-EW bag {}: {} scans, {} lines (median {} points)",
@@ -823,12 +858,6 @@ fn print_real(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
         u.occupied_cells_lidar_only_without_deskew,
         u.occupied_cells_not_moving
     )?;
-    outln!()?;
-    outln!("Detection on every shared log (scans with walls in view: 20 valid returns or more)")?;
-    print_detection_stats(&r.detection)?;
-    outln!()?;
-    outln!("The same, on each log's own sensor profile (--sensor)")?;
-    print_detection_stats(&r.detection_with_sensor)?;
     Ok(())
 }
 
