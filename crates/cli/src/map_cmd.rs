@@ -303,6 +303,8 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
                     LoopOutcome::Unconstrained => "unconstrained",
                     LoopOutcome::LargeResidual => "large_residual",
                     LoopOutcome::SeesThroughWalls => "sees_through_walls",
+                    LoopOutcome::Ambiguous => "ambiguous",
+                    LoopOutcome::Unconfirmed => "unconfirmed",
                     _ => "other",
                 },
                 candidate_from_current: [
@@ -312,6 +314,7 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
                 ],
                 matched_length_m: r.matched_length_m,
                 weakest_direction_m: r.weakest_direction_m,
+                runner_up_length_m: r.runner_up_length_m,
                 rms_m: r.rms_m,
                 see_through: r.see_through,
             })
@@ -363,6 +366,9 @@ struct LoopOut {
     candidate_from_current: [f64; 3],
     matched_length_m: f64,
     weakest_direction_m: f64,
+    /// Wall matched by the best alignment at least 0.5 m or 5° away from
+    /// this one (repeated structure scores close to `matched_length_m`).
+    runner_up_length_m: f64,
     rms_m: f64,
     see_through: f64,
 }
