@@ -115,7 +115,7 @@ impl Default for AlignmentConfig {
 }
 
 /// A bound on the transform, from what the caller already knows: hypotheses
-/// outside it are not scored.
+/// outside it are not scored, and its own transform is scored as one.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AlignmentPrior {
     /// The expected `candidate_from_current`.
@@ -262,11 +262,18 @@ fn matches(
 /// `candidate_from_current` that lays the most wall of one set over the
 /// other, refined by least squares.
 ///
-/// Edge cases: fewer than two usable lines in either set (or no pair of
-/// lines at least [`AlignmentConfig::min_pair_angle_rad`] apart), or no
-/// hypothesis with a match, gives `None`. Degenerate lines (zero length,
-/// non-finite) are ignored. A parallel-only set (a corridor) yields no
-/// hypothesis: its along-corridor offset is unobservable.
+/// Hypotheses come from pairs of lines that meet at a corner, matched
+/// between the sets; with a `prior`, the prior's own transform is one more
+/// (where the caller's chain places the current set), so a repeated
+/// structure that the corner pairs only catch one period away shows up as a
+/// close runner-up instead of a confident wrong fit.
+///
+/// Edge cases: fewer than two usable lines in either set, or no hypothesis
+/// with a match, gives `None`. Degenerate lines (zero length, non-finite)
+/// are ignored. Without a prior, a parallel-only set (a corridor) yields no
+/// hypothesis: its along-corridor offset is unobservable; with one, its fit
+/// reports that direction as unconstrained
+/// ([`Alignment::weakest_direction_m`] near zero) or fails (`None`).
 ///
 /// ```
 /// use pcaline_aiding::{AlignmentConfig, align_lines};
@@ -379,6 +386,21 @@ pub fn align_lines(
                     }
                 }
             }
+        }
+    }
+    // The prior itself is a hypothesis too: where the chain places the
+    // current set. In a corridor with a repeated structure the corner pairs
+    // may only produce an alignment one period away; scored here, the
+    // prior's own overlap makes such an alignment ambiguous (the runner-up
+    // below) instead of a confident false loop.
+    if let Some(prior) = prior {
+        let t = prior.candidate_from_current;
+        let score = matches(&cur, &cand, &t, config, &mut scratch);
+        if score > 0.0 {
+            scored.push((score, t));
+        }
+        if best.is_none_or(|(s, _)| score > s) {
+            best = Some((score, t));
         }
     }
     let (score, t) = best?;
@@ -560,6 +582,34 @@ mod tests {
         assert!(a.rms_m < 1e-6);
         // The room has one fit; any other places at most a wall or two.
         assert!(a.runner_up_length_m < 0.6 * a.matched_length_m, "{a:?}");
+    }
+
+    /// A corridor whose only cross wall meets no other line within
+    /// `max_corner_distance_m`: no corner pair, so no hypothesis without a
+    /// prior; the prior's own transform is scored and refined.
+    #[test]
+    fn the_prior_is_a_hypothesis_when_no_corner_pair_is() {
+        let corridor = vec![
+            seg((0.0, 0.0), (10.0, 0.0)),
+            seg((0.0, 2.0), (10.0, 2.0)),
+            seg((14.0, 0.5), (14.0, 1.5)),
+        ];
+        let truth = Pose2::new(0.3, 0.05, 0.02);
+        let seen: Vec<_> = corridor.iter().map(|l| l.transformed(&truth.inverse())).collect();
+        let config = AlignmentConfig::standard();
+        assert!(align_lines(&seen, &corridor, None, &config).is_none());
+        let near = Pose2::new(0.33, 0.03, 0.025);
+        let prior =
+            AlignmentPrior { candidate_from_current: near, radius_m: 1.0, max_rotation_rad: 0.1 };
+        let a = align_lines(&seen, &corridor, Some(&prior), &config).unwrap();
+        let e = a.candidate_from_current.between(&truth);
+        assert!(e.x.hypot(e.y) < 1e-6 && e.heading.abs() < 1e-6, "{e:?}");
+        // Without the cross wall the along-corridor offset is unobservable.
+        let walls = &corridor[..2];
+        let seen: Vec<_> = walls.iter().map(|l| l.transformed(&truth.inverse())).collect();
+        if let Some(a) = align_lines(&seen, walls, Some(&prior), &config) {
+            assert!(a.weakest_direction_m < 0.1, "{a:?}");
+        }
     }
 
     #[test]
