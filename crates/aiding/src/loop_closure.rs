@@ -90,8 +90,9 @@ pub struct LoopClosureConfig {
     /// After an accepted loop, this many keyframes look for none.
     pub loop_spacing_keyframes: usize,
     /// A verified loop is added once another, from a keyframe at most this
-    /// many keyframes later, asks the graph for the same correction (0: no
-    /// confirmation) ...
+    /// many keyframes later, closes the same cycle (the two loops and the
+    /// chain pieces between their keyframes and between their candidates
+    /// compose to the identity; 0: no confirmation) ...
     pub confirm_keyframes: usize,
     /// ... within this distance, metres ...
     pub confirm_distance_m: f64,
@@ -286,8 +287,8 @@ pub enum LoopOutcome {
     /// Another alignment, at least 0.5 m or 5° away, matches almost as
     /// much wall: the structure repeats.
     Ambiguous,
-    /// Verified, but no second loop from the next keyframes asked for the
-    /// same correction ([`LoopClosureConfig::confirm_keyframes`]).
+    /// Verified, but no second loop from the next keyframes closed the
+    /// same cycle ([`LoopClosureConfig::confirm_keyframes`]).
     Unconfirmed,
 }
 
@@ -689,33 +690,38 @@ impl LoopClosing {
     }
 
     /// Step 3: the verified loop waits for a second, from another of the
-    /// last keyframes, that asks for the same correction; once confirmed,
-    /// both become edges of the graph. Returns the edges added.
+    /// last keyframes, that closes the same cycle; once confirmed, both
+    /// become edges of the graph. Returns the edges added.
     fn confirm_loop(&mut self, current: usize, j: usize, a: Alignment, see_through: f64) -> usize {
         let c = self.config;
-        let here = self.graph.nodes[current];
-        // The correction the loop asks of the graph, in the current
-        // keyframe's frame.
-        let predicted = self.graph.nodes[j].between(&here);
-        let correction = predicted.between(&a.candidate_from_current);
         self.loops.push(record(current, j, &a, see_through, LoopOutcome::Unconfirmed));
         let index = self.loops.len() - 1;
         // Confirmation: a loop stands once a second one, from another of
-        // the last keyframes, asks for the same correction in its own
-        // keyframe's frame. A false loop from aliasing (a repeated door, a
-        // symmetric junction) rarely repeats; a correction with a large
-        // rotation differs from keyframe to keyframe by the rotation times
-        // the distance between them, and waits for a closer pair.
+        // the last keyframes, closes the same cycle: the first loop, the
+        // chain from its keyframe to this one, and this loop back along the
+        // chain between the candidates, compose to the identity. Only the
+        // short chain pieces enter the test, not the drift the loops
+        // correct, so a large correction confirms as readily as a small
+        // one. A false loop from aliasing (a repeated door, a symmetric
+        // junction) rarely repeats.
         self.pending.retain(|p| current - p.keyframe <= c.confirm_keyframes);
+        let nodes = &self.graph.nodes;
+        let loops = &self.loops;
         let agrees = |p: &PendingLoop| {
-            let d = p.correction.between(&correction);
+            let earlier = &loops[p.record];
+            let (kp, jp) = (earlier.keyframe, earlier.candidate);
+            // The earlier candidate's frame to this keyframe, both ways.
+            let via_earlier =
+                earlier.candidate_from_current.compose(&nodes[kp].between(&nodes[current]));
+            let via_this = nodes[jp].between(&nodes[j]).compose(&a.candidate_from_current);
+            let d = via_earlier.between(&via_this);
             d.x.hypot(d.y) <= c.confirm_distance_m
                 && wrap_angle(d.heading).abs() <= c.confirm_rotation_rad
         };
         let confirmed: Vec<usize> =
             self.pending.iter().filter(|p| agrees(p)).map(|p| p.record).collect();
         if c.confirm_keyframes > 0 && confirmed.is_empty() {
-            self.pending.push(PendingLoop { keyframe: current, correction, record: index });
+            self.pending.push(PendingLoop { keyframe: current, record: index });
             return 0;
         }
         let mut added = 0;
@@ -737,7 +743,7 @@ impl LoopClosing {
             self.loops[r].outcome = LoopOutcome::Accepted;
             added += 1;
         }
-        self.pending.push(PendingLoop { keyframe: current, correction, record: index });
+        self.pending.push(PendingLoop { keyframe: current, record: index });
         added
     }
 
@@ -814,9 +820,6 @@ fn record(
 #[derive(Debug, Clone, Copy)]
 struct PendingLoop {
     keyframe: usize,
-    /// `predicted^-1 * aligned`: what the loop would change, in its
-    /// keyframe's frame.
-    correction: Pose2,
     /// Its index in the loop records.
     record: usize,
 }
