@@ -589,6 +589,16 @@ fn print_range_bearing() -> anyhow::Result<()> {
 }
 
 fn print_detection(rows: &[Row], compare: bool) -> anyhow::Result<()> {
+    print_detection_table(rows, compare)?;
+    outln!()?;
+    print_recall_by_length(rows)?;
+    outln!()?;
+    print_lines_off_surface(rows)
+}
+
+/// One row per noise level and configuration; with `compare`, the second
+/// configuration minus the first.
+fn print_detection_table(rows: &[Row], compare: bool) -> anyhow::Result<()> {
     outln!(
         "{:>6}  {:<22} {:>6} {:>6} {:>7} {:>6} {:>6} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>9}",
         "sigma",
@@ -648,7 +658,11 @@ fn print_detection(rows: &[Row], compare: bool) -> anyhow::Result<()> {
             )?;
         }
     }
-    outln!()?;
+    Ok(())
+}
+
+/// Recall in four bins of true wall length.
+fn print_recall_by_length(rows: &[Row]) -> anyhow::Result<()> {
     outln!("Recall by true wall length")?;
     outln!(
         "{:>6}  {:<22} {:>9} {:>9} {:>9} {:>9}",
@@ -663,7 +677,11 @@ fn print_detection(rows: &[Row], compare: bool) -> anyhow::Result<()> {
         let [a, b, c, d] = r.recall_by_length;
         outln!("{:>4}mm  {:<22} {a:>9.3} {b:>9.3} {c:>9.3} {d:>9.3}", r.sigma_mm, r.config)?;
     }
-    outln!()?;
+    Ok(())
+}
+
+/// How far the detected lines lie from the nearest true wall, in noise sigmas.
+fn print_lines_off_surface(rows: &[Row]) -> anyhow::Result<()> {
     outln!(
         "Lines off their surface: rms distance of each detected line from the nearest true wall, in noise sigmas"
     )?;
