@@ -31,8 +31,8 @@
 //! thread's budget).
 
 use crate::{
-    Aiding, AidingConfig, Alignment, AlignmentConfig, AlignmentPrior, EdgeKind, ObservedLine,
-    OptimizeReport, OptimizerConfig, PoseGraph, SensorLine, StepReport, align_lines,
+    Aiding, AidingConfig, Alignment, AlignmentConfig, AlignmentPrior, EdgeKind, Fallback,
+    ObservedLine, OptimizeReport, OptimizerConfig, PoseGraph, SensorLine, StepReport, align_lines,
     see_through_fraction,
 };
 
@@ -494,7 +494,14 @@ impl LoopClosing {
                     || wrap_angle(rel.heading).abs() >= self.config.keyframe_turn_rad
             }
         };
-        if !is_keyframe || !pose.is_finite() {
+        // A scan the estimator skipped (its stamp went backwards, its source
+        // was not finite) has a guessed pose and put nothing in the map: it
+        // is no keyframe, and no loop or optimization starts from it.
+        let skipped = matches!(
+            step.report.fallback,
+            Some(Fallback::StampBackwards | Fallback::NonFiniteSource)
+        );
+        if !is_keyframe || skipped || !pose.is_finite() {
             let k = self.graph.nodes.len().saturating_sub(1);
             let rel = last.map(|n| n.between(&pose)).filter(Pose2::is_finite);
             self.scans.push(last.map(|_| (k, rel.unwrap_or_default())));
@@ -940,6 +947,33 @@ mod tests {
             slam.keyframes().len(),
             slam.keyframes().last().map(|k| k.path_m)
         );
+    }
+
+    /// A scan whose stamp goes backwards is skipped by the estimator: its
+    /// pose is the last one moved by the source, and it makes no keyframe
+    /// (no loop or optimization may start from a guessed pose).
+    #[test]
+    fn a_skipped_scan_makes_no_keyframe() {
+        let walls = room(0.0);
+        let mut slam = LoopClosing::new(
+            AidingConfig::estimator(),
+            MapConfig::default(),
+            LoopClosureConfig::standard(),
+        )
+        .unwrap();
+        let first = Pose2::new(1.0, 1.0, 0.0);
+        slam.step_at(1.0, &first, &seen(&walls, &first));
+        assert_eq!(slam.keyframes().len(), 1);
+        // Turned by 30° (a keyframe's worth), but stamped before the first.
+        let turned = Pose2::new(1.0, 1.0, 0.5);
+        let step = slam.step_at(0.5, &turned, &seen(&walls, &turned));
+        assert_eq!(step.report.fallback, Some(Fallback::StampBackwards));
+        assert_eq!(step.keyframe, None);
+        assert_eq!(slam.keyframes().len(), 1);
+        assert!((step.pose.heading - 0.5).abs() < 1e-9, "{:?}", step.pose);
+        // The next scan in order is processed and becomes a keyframe.
+        let step = slam.step_at(2.0, &turned, &seen(&walls, &turned));
+        assert_eq!(step.keyframe, Some(1));
     }
 
     #[test]
