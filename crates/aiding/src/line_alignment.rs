@@ -350,6 +350,15 @@ pub fn align_lines(
     let mut best: Option<(f64, Pose2)> = None;
     // Every hypothesis's score, for the runner-up distinct from the best.
     let mut scored: Vec<(f64, Pose2)> = Vec::new();
+    let mut consider = |t: Pose2| {
+        let score = matches(&cur, &cand, &t, config, &mut scratch);
+        if score > 0.0 {
+            scored.push((score, t));
+        }
+        if best.is_none_or(|(s, _)| score > s) {
+            best = Some((score, t));
+        }
+    };
     for &(a, b, angle, p) in &cur_pairs {
         for &(c, d, angle_k, q) in &cand_pairs {
             if (angle - angle_k).abs() > config.pair_angle_tolerance_rad {
@@ -377,13 +386,7 @@ pub fn align_lines(
                             continue;
                         }
                     }
-                    let score = matches(&cur, &cand, &t, config, &mut scratch);
-                    if score > 0.0 {
-                        scored.push((score, t));
-                    }
-                    if best.is_none_or(|(s, _)| score > s) {
-                        best = Some((score, t));
-                    }
+                    consider(t);
                 }
             }
         }
@@ -394,14 +397,7 @@ pub fn align_lines(
     // prior's own overlap makes such an alignment ambiguous (the runner-up
     // below) instead of a confident false loop.
     if let Some(prior) = prior {
-        let t = prior.candidate_from_current;
-        let score = matches(&cur, &cand, &t, config, &mut scratch);
-        if score > 0.0 {
-            scored.push((score, t));
-        }
-        if best.is_none_or(|(s, _)| score > s) {
-            best = Some((score, t));
-        }
+        consider(prior.candidate_from_current);
     }
     let (score, t) = best?;
     if score.is_nan() || score <= 0.0 {
