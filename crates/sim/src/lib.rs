@@ -27,6 +27,7 @@ mod sensor;
 mod simulate;
 mod surfaces;
 mod trajectory;
+mod wall_grid;
 mod world;
 
 pub use maze::{MazeConfig, WallStyle, generate_maze};

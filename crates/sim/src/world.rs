@@ -1,10 +1,8 @@
 //! [`World`]: the wall segments of a scene and ray casting against them, with a
-//! parry2d BVH to find candidate walls and a closed-form ray/segment test in
-//! `f64` for the exact hit.
+//! uniform grid walk ([`crate::wall_grid`]) to find candidate walls and a
+//! closed-form ray/segment test in `f64` for the exact hit.
 
-use parry2d::bounding_volume::Aabb;
-use parry2d::math::Vector as GlamVec;
-use parry2d::partitioning::{Bvh, BvhBuildStrategy, TraversalAction};
+use crate::wall_grid::WallGrid;
 use pcaline_geometry::{Point2, Vector2};
 
 /// One straight wall segment of the world.
@@ -34,25 +32,16 @@ pub struct Hit {
 pub struct World {
     walls: Vec<Wall>,
     surfaces: Vec<u32>,
-    bvh: Bvh,
+    grid: WallGrid,
 }
 
 impl World {
     /// Indexes `walls`. Zero-length walls are kept but never hit.
     pub fn new(walls: Vec<Wall>) -> Self {
-        let leaves: Vec<Aabb> = walls
-            .iter()
-            .map(|w| {
-                let pad = 1e-4;
-                Aabb::new(
-                    GlamVec::new((w.a.x.min(w.b.x) - pad) as f32, (w.a.y.min(w.b.y) - pad) as f32),
-                    GlamVec::new((w.a.x.max(w.b.x) + pad) as f32, (w.a.y.max(w.b.y) + pad) as f32),
-                )
-            })
-            .collect();
-        let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves);
+        let ends: Vec<_> = walls.iter().map(|w| (w.a, w.b)).collect();
+        let grid = WallGrid::new(&ends);
         let surfaces = crate::collinear_surfaces(&walls);
-        World { walls, surfaces, bvh }
+        World { walls, surfaces, grid }
     }
 
     /// The walls.
@@ -79,7 +68,7 @@ impl World {
 
     /// As [`World::cast`], testing wall `hint` first. Consecutive beams of a
     /// scan mostly hit the same wall: its distance bounds the search, so the
-    /// BVH traversal prunes almost everything else.
+    /// grid walk stops at the cell that wall is hit in.
     pub fn cast_hinted(
         &self,
         origin: &Point2<f64>,
@@ -97,28 +86,16 @@ impl World {
             best_t = t;
             best_wall = Some(h);
         }
-        // Slab test against node boxes in f32, with slack for the rounding;
-        // the exact test of each candidate wall is in f64.
-        let (ox, oy) = (origin.x as f32, origin.y as f32);
-        let (ix, iy) = (1.0 / dir.x as f32, 1.0 / dir.y as f32);
-        let slack = 1e-3f32;
-        self.bvh.traverse(|node| {
-            let (lo, hi) = (node.mins(), node.maxs());
-            let (tx1, tx2) = ((lo.x - ox) * ix, (hi.x - ox) * ix);
-            let (ty1, ty2) = ((lo.y - oy) * iy, (hi.y - oy) * iy);
-            let enter = tx1.min(tx2).max(ty1.min(ty2)).max(0.0);
-            let exit = tx1.max(tx2).min(ty1.max(ty2));
-            if enter > exit + slack || enter > best_t as f32 + slack {
-                return TraversalAction::Prune;
+        self.grid.walk(origin, dir, best_t, |candidates| {
+            for &w in candidates {
+                if let Some(t) = ray_segment(origin, dir, &self.walls[w as usize])
+                    && t < best_t
+                {
+                    best_t = t;
+                    best_wall = Some(w);
+                }
             }
-            if let Some(leaf) = node.leaf_data()
-                && let Some(t) = ray_segment(origin, dir, &self.walls[leaf as usize])
-                && t < best_t
-            {
-                best_t = t;
-                best_wall = Some(leaf);
-            }
-            TraversalAction::Continue
+            best_t
         });
         best_wall.map(|wall| Hit { wall, distance_m: best_t, point: origin + dir * best_t })
     }
@@ -181,22 +158,46 @@ mod tests {
         );
     }
 
+    #[test]
+    fn rays_along_grid_lines_and_from_outside_find_the_nearest_wall() {
+        // A row of walls at x = 0, 1, 2, ... (cell boundaries of some grid),
+        // cast along them, across them, and from outside the grid.
+        let walls: Vec<_> = (0..10).map(|i| wall(i as f64, 0.0, i as f64, 3.0)).collect();
+        let world = World::new(walls);
+        for (origin, dir) in [
+            (Point2::new(-5.0, 1.5), Vector2::new(1.0, 0.0)),
+            (Point2::new(20.0, 1.5), Vector2::new(-1.0, 0.0)),
+            (Point2::new(4.0, -5.0), Vector2::new(0.0, 1.0)),
+            (Point2::new(4.5, 10.0), Vector2::new(0.0, -1.0)),
+            (Point2::new(0.5, 0.5), Vector2::new(0.6, 0.8)),
+        ] {
+            let a = world.cast(&origin, &dir, 30.0).map(|h| h.distance_m);
+            let b = world.cast_brute_force(&origin, &dir, 30.0).map(|h| h.distance_m);
+            assert_eq!(a, b, "{origin:?} {dir:?}");
+        }
+        assert!(world.cast(&Point2::new(4.5, 10.0), &Vector2::new(0.0, -1.0), 30.0).is_none());
+    }
+
     proptest! {
         #[test]
         fn indexed_cast_matches_brute_force(
             walls in prop::collection::vec((-20.0f64..20.0, -20.0f64..20.0, -3.0f64..3.0, -3.0f64..3.0), 1..60),
             angle in -3.2f64..3.2,
+            axis_aligned in any::<bool>(),
+            (ox, oy) in (-30.0f64..30.0, -30.0f64..30.0),
         ) {
             let world = World::new(walls.iter().map(|&(x, y, dx, dy)| wall(x, y, x + dx, y + dy)).collect());
+            let angle = if axis_aligned { (angle / std::f64::consts::FRAC_PI_2).round() * std::f64::consts::FRAC_PI_2 } else { angle };
             let dir = Vector2::new(angle.cos(), angle.sin());
-            let origin = Point2::new(0.5, 0.25);
-            let b = world.cast_brute_force(&origin, &dir, 30.0);
-            for hint in [None, Some(0), Some(walls.len() as u32 - 1), Some(u32::MAX)] {
-                let a = world.cast_hinted(&origin, &dir, 30.0, hint);
-                match (a, b) {
-                    (None, None) => {}
-                    (Some(a), Some(b)) => prop_assert!((a.distance_m - b.distance_m).abs() < 1e-9),
-                    _ => prop_assert!(false, "{a:?} vs {b:?}"),
+            for origin in [Point2::new(0.5, 0.25), Point2::new(ox, oy)] {
+                let b = world.cast_brute_force(&origin, &dir, 30.0);
+                for hint in [None, Some(0), Some(walls.len() as u32 - 1), Some(u32::MAX)] {
+                    let a = world.cast_hinted(&origin, &dir, 30.0, hint);
+                    match (a, b) {
+                        (None, None) => {}
+                        (Some(a), Some(b)) => prop_assert!((a.distance_m - b.distance_m).abs() < 1e-9),
+                        _ => prop_assert!(false, "{a:?} vs {b:?}"),
+                    }
                 }
             }
         }
