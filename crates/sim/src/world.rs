@@ -176,6 +176,18 @@ mod tests {
             assert_eq!(a, b, "{origin:?} {dir:?}");
         }
         assert!(world.cast(&Point2::new(4.5, 10.0), &Vector2::new(0.0, -1.0), 30.0).is_none());
+        // Degenerate rays end, and hit nothing.
+        let nan = f64::NAN;
+        for (origin, dir) in [
+            (Point2::new(nan, 1.0), Vector2::new(1.0, 0.0)),
+            (Point2::new(0.5, 1.0), Vector2::new(nan, 0.0)),
+            (Point2::new(0.5, 1.0), Vector2::new(nan, nan)),
+            (Point2::new(0.5, 1.0), Vector2::new(0.0, 0.0)),
+        ] {
+            assert!(world.cast(&origin, &dir, f64::INFINITY).is_none(), "{origin:?} {dir:?}");
+        }
+        let far = world.cast(&Point2::new(-5.0, 1.5), &Vector2::new(1.0, 0.0), f64::INFINITY);
+        assert_eq!(far.map(|h| h.wall), Some(0));
     }
 
     proptest! {
