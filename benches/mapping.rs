@@ -2,7 +2,9 @@
 //! aiding and the estimator), against maps of 100, 10,000 and 100,000
 //! lines. The maze's own lines are in the map; the rest are filler lines at
 //! the maze's density over a growing area, so the bench shows whether the
-//! spatial index keeps the cost independent of the map's size.
+//! spatial index keeps the cost independent of the map's size. Two groups:
+//! one step on a fresh (cold) copy of the map, and 50 consecutive scans
+//! stepped on one copy (warm, as in a log), per scan.
 
 use criterion::{BatchSize, BenchmarkId, Criterion, criterion_group, criterion_main};
 use pcaline::aiding::{Aiding, AidingConfig, SensorLine};
@@ -83,6 +85,42 @@ fn mapping(c: &mut Criterion) {
                     |a| black_box(a.step_at(0.025, &pose, &lines)),
                     BatchSize::LargeInput,
                 )
+            });
+        }
+    }
+    group.finish();
+
+    // The same, over a run: 50 consecutive scans stepped in order on one
+    // copy of the map (the copy is not timed), the time divided by 50. The
+    // lines near the vehicle stay in cache from scan to scan, as in a log.
+    let run = &scans[150..200];
+    let mut group = c.benchmark_group("map_update_and_aiding_per_scan_over_50_scans");
+    for total in [100, 10_000, 100_000] {
+        let map = with_filler(&base, total);
+        for (name, config) in [
+            ("heading", AidingConfig::heading()),
+            ("full_pose", AidingConfig::full_pose()),
+            ("estimator", AidingConfig::estimator()),
+        ] {
+            let mut aiding = Aiding::with_map(config, map.clone()).unwrap();
+            aiding.step_at(0.0, &before, &before_lines);
+            group.bench_with_input(BenchmarkId::new(name, total), &aiding, |b, aiding| {
+                b.iter_custom(|iterations| {
+                    let mut total = std::time::Duration::ZERO;
+                    for _ in 0..iterations.div_ceil(run.len() as u64) {
+                        let mut a = aiding.clone();
+                        let start = std::time::Instant::now();
+                        for (k, (pose, lines)) in run.iter().enumerate() {
+                            black_box(a.step_at(0.025 * (k + 1) as f64, pose, lines));
+                        }
+                        total += start.elapsed();
+                    }
+                    // Per step: `iterations` steps' worth of time.
+                    total.mul_f64(
+                        iterations as f64
+                            / (iterations.div_ceil(run.len() as u64) * run.len() as u64) as f64,
+                    )
+                })
             });
         }
     }

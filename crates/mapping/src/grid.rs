@@ -2,8 +2,8 @@
 //! cost independent of the size of the map. Each segment remembers the cells
 //! it is registered in, so it can be removed or renumbered exactly.
 
+use crate::fast_hash::FastMap;
 use pcaline_geometry::Point2;
-use std::collections::HashMap;
 
 type Key = (i32, i32);
 
@@ -11,14 +11,14 @@ type Key = (i32, i32);
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Grid {
     cell_m: f64,
-    cells: HashMap<Key, Vec<u32>>,
+    cells: FastMap<Key, Vec<u32>>,
     /// `cells_of[id]`: the cells segment `id` is registered in.
     cells_of: Vec<Vec<Key>>,
 }
 
 impl Grid {
     pub(crate) fn new(cell_m: f64) -> Self {
-        Grid { cell_m, cells: HashMap::new(), cells_of: Vec::new() }
+        Grid { cell_m, cells: FastMap::default(), cells_of: Vec::new() }
     }
 
     fn key(&self, x: f64, y: f64) -> Key {

@@ -22,6 +22,7 @@
 //! assert!((map.lines()[0].line.length() - 2.0).abs() < 1e-9);
 //! ```
 
+mod fast_hash;
 mod grid;
 mod lifecycle;
 mod map;

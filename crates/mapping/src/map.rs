@@ -2,11 +2,13 @@
 //! matching new lines against map lines (eq. 8-10), endpoint update by
 //! projection, and the refined variant that keeps every absorbed point's sums.
 
+use crate::fast_hash::FastMap;
 use crate::grid::Grid;
-use crate::{LineDistance, LineStatus, MapConfig, MergeGate, line_distance};
+use crate::metrics::line_distance_from;
+use crate::{LineDistance, LineStatus, MapConfig, MergeGate};
 use pcaline_fitting::{Moments, line_from_moments};
-use pcaline_geometry::{ConfigError, LineSegment, Point2, Pose2, Vector2};
-use std::collections::{HashMap, VecDeque};
+use pcaline_geometry::{ConfigError, LineSegment, Point2, Pose2, Vector2, line_angle_diff};
+use std::collections::VecDeque;
 
 /// A stable identifier of a map line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -240,7 +242,7 @@ pub struct LineMap {
     /// Whether scans are counted by the caller; otherwise every insertion
     /// is a scan of its own.
     counted: bool,
-    index_of: HashMap<LineId, usize>,
+    index_of: FastMap<LineId, usize>,
     /// Tentative lines by first scan, oldest first (may hold lines since
     /// confirmed or removed).
     tentative: VecDeque<(u64, LineId)>,
@@ -257,7 +259,7 @@ impl LineMap {
             next_id: 0,
             scan: 0,
             counted: false,
-            index_of: HashMap::new(),
+            index_of: FastMap::default(),
             tentative: VecDeque::new(),
         })
     }
@@ -408,10 +410,15 @@ impl LineMap {
         self.grid.for_each_near(&line.centroid, gate.max_d_rho_m, |id| {
             let index = id as usize;
             let m = &self.lines[index];
-            let distance = line_distance(&m.line, line, self.config.centroid_term);
-            let offset_ok = gate.max_offset_m.is_none_or(|max| {
-                (m.line.normal().dot(&line.centroid.coords) - m.line.d).abs() < max
-            });
+            // The angle first: it rejects most candidates without a sine.
+            if line_angle_diff(m.line.alpha, line.alpha).abs() >= gate.max_d_alpha_rad {
+                return;
+            }
+            let normal = m.line.normal();
+            let distance = line_distance_from(&m.line, &normal, line, self.config.centroid_term);
+            let offset_ok = gate
+                .max_offset_m
+                .is_none_or(|max| (normal.dot(&line.centroid.coords) - m.line.d).abs() < max);
             let side_ok = !self.config.sided || same_side(m, viewpoint);
             if distance.d_alpha.abs() < gate.max_d_alpha_rad
                 && distance.d_rho < gate.max_d_rho_m
@@ -577,7 +584,7 @@ impl LineMap {
                     _ => true,
                 };
                 if facing_ok
-                    && line_distance(&me.line, &o.line, self.config.centroid_term).d_alpha.abs()
+                    && line_angle_diff(me.line.alpha, o.line.alpha).abs()
                         < self.config.max_d_alpha_rad
                     && within_merge_gate(&me.line, &o.line, &gate)
                     && within_merge_gate(&o.line, &me.line, &gate)

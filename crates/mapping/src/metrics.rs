@@ -1,7 +1,7 @@
 //! The matching metrics of the paper's section 2.1: the orientation difference
 //! `d_alpha` and the distance `d_rho = d_d + d_C` (eq. 8-10), in Hessian form.
 
-use pcaline_geometry::{LineSegment, Point2, line_angle_diff};
+use pcaline_geometry::{LineSegment, Point2, Vector2, line_angle_diff};
 
 /// Which centroid term `d_C` enters `d_rho`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -46,8 +46,19 @@ pub struct LineDistance {
 /// assert!((m.d_rho - (0.1 + (0.1f64.powi(2) + 3.5f64.powi(2)).sqrt())).abs() < 1e-12);
 /// ```
 pub fn line_distance(map: &LineSegment, new: &LineSegment, term: CentroidTerm) -> LineDistance {
+    line_distance_from(map, &map.normal(), new, term)
+}
+
+/// [`line_distance`] with the map line's unit normal already computed
+/// (`map_normal = map.normal()`), for callers that need it too.
+pub(crate) fn line_distance_from(
+    map: &LineSegment,
+    map_normal: &Vector2<f64>,
+    new: &LineSegment,
+    term: CentroidTerm,
+) -> LineDistance {
     let d_alpha = line_angle_diff(map.alpha, new.alpha);
-    let d_d = (map.normal().dot(&new.centroid.coords) - map.d).abs();
+    let d_d = (map_normal.dot(&new.centroid.coords) - map.d).abs();
     let d_c = match term {
         CentroidTerm::Centroid => (map.centroid - new.centroid).norm(),
         CentroidTerm::SegmentGap => segment_gap(map, &new.centroid),
