@@ -129,7 +129,7 @@ fn the_large_building_closes_no_false_loop() {
         },
     )
     .unwrap();
-    let slam = run.loop_closing.as_ref().unwrap();
+    let slam = run.loop_closing().unwrap();
     let truth = sim.true_poses();
     for r in slam.loops().iter().filter(|r| r.outcome == LoopOutcome::Accepted) {
         let (k, j) = (slam.keyframes()[r.keyframe].scan, slam.keyframes()[r.candidate].scan);

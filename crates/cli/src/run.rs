@@ -185,14 +185,14 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
         let Some(m) = mcap.as_mut() else { return Ok(()) };
         let f = step.frame;
         let stamp = m.stamp(Some(f.time_s));
-        let corrected = step.loop_closing.and_then(|l| l.pose());
+        let corrected = step.loop_closing().and_then(|l| l.pose());
         let poses = [
             (PoseKind::Source, Some(f.odometry_pose)),
             (PoseKind::Corrected, corrected),
             (PoseKind::Truth, Some(f.true_pose)),
         ];
         m.scan(stamp, &f.scan, step.lines.iter().map(|l| &l.line), &poses)?;
-        match step.loop_closing {
+        match step.loop_closing() {
             Some(l) => m.map_if_due(stamp, l.map()),
             None => Ok(()),
         }
@@ -247,7 +247,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
     }
     // The map of the default: the estimator with loop closure.
     let full =
-        run.loop_closing.as_ref().map_or(&run.loops[Loop::Estimator.index()], |l| l.aiding());
+        run.loop_closing().map_or(run.loops[Loop::Estimator.index()].aiding(), |l| l.aiding());
 
     let scores = run.scores(sim.true_poses()).context("the scene has no scans")?;
     let modes: Vec<ModeSummary> = Loop::ALL

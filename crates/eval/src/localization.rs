@@ -4,7 +4,7 @@
 //! each scored by its trajectory errors and its map's quality.
 
 use crate::{MapQuality, TrajectoryErrors, VisibleWalls, map_quality, trajectory_errors};
-use pcaline_aiding::{Aiding, AidingConfig, LoopClosing, LoopClosureConfig, SensorLine};
+use pcaline_aiding::{AidingConfig, Localizer, LoopClosing, LoopClosureConfig, SensorLine};
 use pcaline_geometry::{ConfigError, Pose2};
 use pcaline_mapping::MapConfig;
 use pcaline_sim::{SimFrame, Simulator};
@@ -14,15 +14,17 @@ pub const MAP_TOLERANCE_M: f64 = 0.05;
 /// Tolerances of a map line against its wall: direction, degrees.
 pub const MAP_MAX_ANGLE_DEG: f64 = 2.0;
 
-/// Several aiding loops run over one simulated run.
+/// Several aiding loops run over one simulated run, each a [`Localizer`]
+/// fed the same detected lines.
 #[derive(Debug)]
 pub struct AidedRun {
-    /// The loops, in the order of the configurations given.
-    pub loops: Vec<Aiding>,
-    /// The loop with loop closure, if asked for
-    /// ([`AidedRun::run_with_loop_closure`]).
-    pub loop_closing: Option<LoopClosing>,
-    /// Each loop's pose after every scan (the loop closure's last).
+    /// The loops, in the order of the configurations given; the one with
+    /// loop closure, if asked for ([`AidedRun::run_with_loop_closure`]),
+    /// last.
+    pub loops: Vec<Localizer>,
+    /// Each loop's pose after every scan, in the order of
+    /// [`AidedRun::loops`]; with loop closure, the graph's trajectory after
+    /// a last optimization ([`Localizer::finish`]).
     pub estimates: Vec<Vec<Pose2>>,
     /// The wall length the sensor saw (5 cm bins).
     pub visible: VisibleWalls,
@@ -36,12 +38,17 @@ pub struct RunStep<'a> {
     pub frame: &'a SimFrame,
     /// Its lines, in the sensor frame.
     pub lines: &'a [SensorLine],
-    /// The loops, in the order of the modes: their poses and maps as they
-    /// are after the frame.
-    pub loops: &'a [Aiding],
-    /// The loop with loop closure, when there is one (its pose and map are
-    /// the online ones, before the run's last optimization).
-    pub loop_closing: Option<&'a LoopClosing>,
+    /// The loops, in the order of [`AidedRun::loops`]: their poses and
+    /// maps as they are after the frame (with loop closure, the online ones,
+    /// before the run's last optimization).
+    pub loops: &'a [Localizer],
+}
+
+impl RunStep<'_> {
+    /// The loop with loop closure, when there is one.
+    pub fn loop_closing(&self) -> Option<&LoopClosing> {
+        self.loops.iter().find_map(Localizer::loop_closing)
+    }
 }
 
 /// Why [`AidedRun::run_observed`] failed.
@@ -115,13 +122,13 @@ impl AidedRun {
         mut lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
         mut observe: impl FnMut(RunStep<'_>) -> Result<(), E>,
     ) -> Result<Self, ObservedRunError<E>> {
-        let mut loops =
-            modes.iter().map(|a| Aiding::new(*a, map)).collect::<Result<Vec<_>, _>>()?;
-        let mut loop_closing = loop_closure
-            .map(|(a, l)| LoopClosing::new(a, map, l))
-            .transpose()
-            .map_err(ObservedRunError::Config)?;
-        let mut estimates: Vec<Vec<Pose2>> = modes.iter().map(|_| Vec::new()).collect();
+        let mut loops = modes
+            .iter()
+            .map(|a| (*a, None))
+            .chain(loop_closure.map(|(a, l)| (a, Some(l))))
+            .map(|(a, l)| Localizer::new(a, map, l))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut estimates: Vec<Vec<Pose2>> = loops.iter().map(|_| Vec::new()).collect();
         let mut visible = VisibleWalls::new(sim.world().walls(), 0.05);
         let mut last: Option<(f64, Pose2)> = None;
         for frame in sim.frames() {
@@ -129,26 +136,24 @@ impl AidedRun {
                 last.and_then(|(t, p)| p.velocity_to(&frame.odometry_pose, frame.time_s - t));
             last = Some((frame.time_s, frame.odometry_pose));
             let lines = lines_of(&frame, velocity);
-            for (aiding, out) in loops.iter_mut().zip(estimates.iter_mut()) {
-                out.push(aiding.step_at(frame.time_s, &frame.odometry_pose, &lines).0);
+            for (localizer, out) in loops.iter_mut().zip(estimates.iter_mut()) {
+                out.push(localizer.step_with(Some(frame.time_s), &frame.odometry_pose, &lines).0);
             }
-            if let Some(l) = loop_closing.as_mut() {
-                l.step_at(frame.time_s, &frame.odometry_pose, &lines);
-            }
-            observe(RunStep {
-                frame: &frame,
-                lines: &lines,
-                loops: &loops,
-                loop_closing: loop_closing.as_ref(),
-            })
-            .map_err(ObservedRunError::Stopped)?;
+            observe(RunStep { frame: &frame, lines: &lines, loops: &loops })
+                .map_err(ObservedRunError::Stopped)?;
             visible.observe(&frame);
         }
-        if let Some(l) = loop_closing.as_mut() {
-            l.optimize();
-            estimates.push(l.trajectory().into_iter().map(Option::unwrap_or_default).collect());
+        for (localizer, out) in loops.iter_mut().zip(estimates.iter_mut()) {
+            if let Some(optimized) = localizer.finish() {
+                *out = optimized.into_iter().map(Option::unwrap_or_default).collect();
+            }
         }
-        Ok(AidedRun { loops, loop_closing, estimates, visible })
+        Ok(AidedRun { loops, estimates, visible })
+    }
+
+    /// The loop with loop closure, when there is one.
+    pub fn loop_closing(&self) -> Option<&LoopClosing> {
+        self.loops.iter().find_map(Localizer::loop_closing)
     }
 
     /// Each loop's errors against `truth` (the run's true poses) and its map's
@@ -156,8 +161,7 @@ impl AidedRun {
     pub fn scores(&self, truth: &[Pose2]) -> Option<Vec<AidedScore>> {
         self.loops
             .iter()
-            .map(Aiding::map)
-            .chain(self.loop_closing.as_ref().map(LoopClosing::map))
+            .map(Localizer::map)
             .zip(&self.estimates)
             .map(|(map, est)| {
                 Some(AidedScore {
