@@ -10,7 +10,7 @@ use anyhow::{Context, Result};
 use pcaline::aiding::{AidingConfig, AidingMode, SensorLine};
 use pcaline::{LineDetector, LineSegment};
 use pcaline_eval::{
-    AidedRun, AidedScore, DetectFn, DetectionCriteria, DetectionEval, FaultMode,
+    AidedRun, AidedScore, DetectFn, DetectionCriteria, DetectionEval, DetectorResult, FaultMode,
     evaluate_detectors, oracle_lines,
 };
 use pcaline_io::parse_scene;
@@ -284,6 +284,9 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
+/// The detection table's rows at range noise `sigma_mm`: every
+/// configuration's detector (and the oracles, with `--oracle`) scored on
+/// every scene and seed.
 fn detection_rows(
     scenes: &[Scene],
     args: &EvalArgs,
@@ -292,20 +295,38 @@ fn detection_rows(
 ) -> Result<Vec<Row>> {
     let mut detectors: Vec<LineDetector> =
         configs.iter().map(|c| LineDetector::new(c.detector)).collect::<Result<_, _>>()?;
+    let criteria = DetectionCriteria::default();
+    let sigma_m = sigma_mm / 1000.0;
+    let (names, mut closures) =
+        detectors_scored(configs, &mut detectors, args.oracle, criteria, sigma_m);
+    let mut refs: Vec<&mut DetectFn<'_>> = closures.iter_mut().map(|c| c.as_mut()).collect();
+    let eval = detection_eval(args, criteria, sigma_m);
+    let results =
+        evaluate_detectors(scenes, &eval, &mut refs).map_err(|e| BadInput(e.to_string()))?;
+    Ok(names.into_iter().zip(results).map(|(name, r)| Row::new(name, sigma_mm, &r)).collect())
+}
+
+/// The detectors a detection table scores, with their names: one per
+/// configuration, and with `oracle` the two perfect segmentations (every true
+/// wall fitted on all of its own points; then only those whose orientation
+/// is known to 2°).
+fn detectors_scored<'a>(
+    configs: &[NamedConfig],
+    detectors: &'a mut [LineDetector],
+    oracle: bool,
+    criteria: DetectionCriteria,
+    sigma_m: f64,
+) -> (Vec<String>, Vec<Box<DetectFn<'a>>>) {
     let mut names: Vec<String> = configs.iter().map(|c| c.name.clone()).collect();
-    let mut closures: Vec<Box<DetectFn<'_>>> = detectors
+    let mut closures: Vec<Box<DetectFn<'a>>> = detectors
         .iter_mut()
         .map(|d| {
             Box::new(move |f: &SimFrame, _: &World| -> Vec<LineSegment> {
                 d.detect(&f.scan).lines.iter().map(|l| l.line).collect()
-            }) as Box<DetectFn<'_>>
+            }) as Box<DetectFn<'a>>
         })
         .collect();
-    let criteria = DetectionCriteria::default();
-    let sigma_m = sigma_mm / 1000.0;
-    if args.oracle {
-        // A perfect segmentation: every true wall fitted on its own points,
-        // all of them, and only those whose orientation is known to 2°.
+    if oracle {
         for (name, max_std) in [("oracle", f64::INFINITY), ("oracle, std <= 2°", 2f64.to_radians())]
         {
             names.push(name.to_string());
@@ -314,7 +335,11 @@ fn detection_rows(
             }));
         }
     }
-    let mut refs: Vec<&mut DetectFn<'_>> = closures.iter_mut().map(|c| c.as_mut()).collect();
+    (names, closures)
+}
+
+/// The detection protocol as the command line sets it.
+fn detection_eval(args: &EvalArgs, criteria: DetectionCriteria, sigma_m: f64) -> DetectionEval {
     let mut eval = DetectionEval::new(sigma_m, args.seeds, args.scans);
     eval.range_resolution_m = args.range_step_mm / 1000.0;
     eval.faults = match args.faults {
@@ -323,47 +348,48 @@ fn detection_rows(
     };
     eval.keep_motion = args.keep_motion;
     eval.criteria = criteria;
-    let results =
-        evaluate_detectors(scenes, &eval, &mut refs).map_err(|e| BadInput(e.to_string()))?;
-    Ok(names
-        .into_iter()
-        .zip(results)
-        .map(|(name, r)| {
-            let s = &r.score;
-            let (am, ar) = s.alpha_error();
-            let (dm, dr) = s.d_error();
-            let (em, er) = s.endpoint_error();
-            Row {
-                sigma_mm,
-                config: name,
-                scans: s.scans,
-                true_walls: s.true_walls,
-                recall: s.recall(),
-                false_positive_fraction: s.false_positive_fraction(),
-                fragmentation: s.fragmentation(),
-                alpha_median_deg: am.to_degrees(),
-                alpha_rms_deg: ar.to_degrees(),
-                d_median_mm: dm * 1e3,
-                d_rms_mm: dr * 1e3,
-                endpoint_median_mm: em * 1e3,
-                endpoint_rms_mm: er * 1e3,
-                time_per_scan_us: r.time_per_scan_us,
-                recall_by_length: s.recall_by_length(),
-                surface_rms_sigmas_max_p99: {
-                    let mut v: Vec<f64> =
-                        r.surface_rms_m.iter().map(|d| d / sigma_m.max(1e-3)).collect();
-                    v.sort_by(f64::total_cmp);
-                    let p99 = v.get((v.len().saturating_sub(1) as f64 * 0.99) as usize);
-                    [v.last().copied().unwrap_or(0.0), p99.copied().unwrap_or(0.0)]
-                },
-                lines_off_surface: r
-                    .surface_rms_m
-                    .iter()
-                    .filter(|d| **d > 3.0 * sigma_m.max(1e-3))
-                    .count(),
-            }
-        })
-        .collect())
+    eval
+}
+
+impl Row {
+    /// The table row of one detector's result at range noise `sigma_mm`.
+    fn new(config: String, sigma_mm: f64, r: &DetectorResult) -> Row {
+        let sigma_m = sigma_mm / 1000.0;
+        let s = &r.score;
+        let (am, ar) = s.alpha_error();
+        let (dm, dr) = s.d_error();
+        let (em, er) = s.endpoint_error();
+        // Each line's rms distance from its surface, in noise sigmas.
+        let mut sigmas: Vec<f64> = r.surface_rms_m.iter().map(|d| d / sigma_m.max(1e-3)).collect();
+        sigmas.sort_by(f64::total_cmp);
+        let p99 = sigmas.get((sigmas.len().saturating_sub(1) as f64 * 0.99) as usize);
+        Row {
+            sigma_mm,
+            config,
+            scans: s.scans,
+            true_walls: s.true_walls,
+            recall: s.recall(),
+            false_positive_fraction: s.false_positive_fraction(),
+            fragmentation: s.fragmentation(),
+            alpha_median_deg: am.to_degrees(),
+            alpha_rms_deg: ar.to_degrees(),
+            d_median_mm: dm * 1e3,
+            d_rms_mm: dr * 1e3,
+            endpoint_median_mm: em * 1e3,
+            endpoint_rms_mm: er * 1e3,
+            time_per_scan_us: r.time_per_scan_us,
+            recall_by_length: s.recall_by_length(),
+            surface_rms_sigmas_max_p99: [
+                sigmas.last().copied().unwrap_or(0.0),
+                p99.copied().unwrap_or(0.0),
+            ],
+            lines_off_surface: r
+                .surface_rms_m
+                .iter()
+                .filter(|d| **d > 3.0 * sigma_m.max(1e-3))
+                .count(),
+        }
+    }
 }
 
 /// Every scene and seed, each configuration's detector feeding the four
@@ -391,23 +417,9 @@ fn localization_rows(
     let scores: Vec<Result<(usize, Vec<AidedScore>)>> = runs
         .par_iter()
         .map(|&(c, scene, seed)| {
-            let c = &configs[c];
-            // The estimator with the configuration's own settings.
-            let aiding: Vec<AidingConfig> = modes
-                .iter()
-                .map(
-                    |(_, a)| if a.mode == AidingMode::Estimator { c.aiding_in(a.mode) } else { *a },
-                )
-                .collect();
-            let sim = Simulator::new(scene, seed).map_err(|e| BadInput(e.to_string()))?;
-            let mut detector = LineDetector::new(c.detector)?;
-            let run = AidedRun::run(&sim, c.map, &aiding, |frame, velocity| {
-                let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
-                detection.lines.iter().map(SensorLine::from).collect()
-            })?;
-            let scores = run.scores(sim.true_poses()).context("a scene without scans")?;
+            let scored = localization_run(&configs[c], scene, seed, &modes);
             bar.inc(1);
-            Ok((sim.len(), scores))
+            scored
         })
         .collect();
     let mut scores = scores.into_iter();
@@ -427,6 +439,29 @@ fn localization_rows(
     }
     bar.finish_and_clear();
     Ok(rows)
+}
+
+/// One localization run of `scene` at `seed`: the configuration's detector
+/// feeding one loop per aiding mode (the estimator with the configuration's
+/// own settings). Returns the run's scan count and each loop's score.
+fn localization_run(
+    c: &NamedConfig,
+    scene: &Scene,
+    seed: u64,
+    modes: &[(&'static str, AidingConfig)],
+) -> Result<(usize, Vec<AidedScore>)> {
+    let aiding: Vec<AidingConfig> = modes
+        .iter()
+        .map(|(_, a)| if a.mode == AidingMode::Estimator { c.aiding_in(a.mode) } else { *a })
+        .collect();
+    let sim = Simulator::new(scene, seed).map_err(|e| BadInput(e.to_string()))?;
+    let mut detector = LineDetector::new(c.detector)?;
+    let run = AidedRun::run(&sim, c.map, &aiding, |frame, velocity| {
+        let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
+        detection.lines.iter().map(SensorLine::from).collect()
+    })?;
+    let scores = run.scores(sim.true_poses()).context("a scene without scans")?;
+    Ok((sim.len(), scores))
 }
 
 /// Sums over runs for one configuration and aiding mode.
