@@ -29,7 +29,7 @@ fn graph(nodes: usize) -> PoseGraph {
     g.add_node(truth[0]);
     for k in 1..nodes {
         let z = truth[k - 1].between(&truth[k]);
-        let z = Pose2::new(z.x * 1.01, z.y, z.heading + 0.002);
+        let z = Pose2::new(z.x() * 1.01, z.y(), z.heading() + 0.002);
         let previous = g.nodes[k - 1];
         g.add_node(previous.compose(&z));
         g.add_edge(k - 1, k, z, cov(0.025, 0.009), EdgeKind::Sequential);

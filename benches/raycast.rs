@@ -32,10 +32,10 @@ fn raycast(c: &mut Criterion) {
     for sim in &worlds {
         let walls = sim.world().walls().len();
         let pose = sim.true_poses()[sim.len() / 2];
-        let origin = Point2::new(pose.x, pose.y);
+        let origin = Point2::new(pose.x(), pose.y());
         let dirs: Vec<Vector2<f64>> = (0..1081)
             .map(|i| {
-                let a = pose.heading - 135f64.to_radians() + i as f64 * 0.25f64.to_radians();
+                let a = pose.heading() - 135f64.to_radians() + i as f64 * 0.25f64.to_radians();
                 Vector2::new(a.cos(), a.sin())
             })
             .collect();

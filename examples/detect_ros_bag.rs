@@ -32,8 +32,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let l = &l.line;
                     println!(
                         "  alpha {:+.3} rad, d {:.3} m, {:.2} m long",
-                        l.alpha,
-                        l.d,
+                        l.alpha(),
+                        l.d(),
                         l.length()
                     );
                 }

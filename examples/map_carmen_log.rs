@@ -36,9 +36,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let p = step.pose;
                 println!(
                     "scan {scans}: pose ({:.2}, {:.2}) m, {:.1}°",
-                    p.x,
-                    p.y,
-                    p.heading.to_degrees()
+                    p.x(),
+                    p.y(),
+                    p.heading().to_degrees()
                 );
             }
         }
@@ -52,7 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mapper.map().len()
     );
     if let Some(p) = mapper.pose() {
-        println!("last pose ({:.2}, {:.2}) m, {:.1}°", p.x, p.y, p.heading.to_degrees());
+        println!("last pose ({:.2}, {:.2}) m, {:.1}°", p.x(), p.y(), p.heading().to_degrees());
     }
     Ok(())
 }

@@ -46,8 +46,8 @@ fn main() {
             "beams {}..={}: alpha {:+.3} rad, d {:.3} m, {:.2} m long",
             l.first_beam,
             l.last_beam,
-            l.line.alpha,
-            l.line.d,
+            l.line.alpha(),
+            l.line.d(),
             l.line.length()
         );
     }

@@ -3,7 +3,7 @@
 
 use crate::Config;
 use pcaline_fitting::{DetectedLine, LineFits, fit_lines};
-use pcaline_geometry::{BearingTable, ConfigError, Pose2, RangeNoise, Scan, ScanPoints};
+use pcaline_geometry::{BearingTable, ConfigError, RangeNoise, Scan, ScanPoints, Twist2};
 use pcaline_segmentation::{
     NoiseEstimate, NoiseScratch, RangeGrid, Segments, detect_range_step, estimate_range_noise,
     segment,
@@ -91,7 +91,7 @@ impl LineDetector {
     /// point is first placed in the frame of the first beam
     /// ([`ScanPoints::deskew`]). Without a velocity or a beam period, the
     /// same as [`LineDetector::detect`].
-    pub fn detect_moving(&mut self, scan: &Scan, velocity: Option<&Pose2>) -> Detection<'_> {
+    pub fn detect_moving(&mut self, scan: &Scan, velocity: Option<&Twist2>) -> Detection<'_> {
         self.points.fill_from(scan, &mut self.table);
         if let (Some(v), Some(dt)) = (velocity, scan.beam_period_s()) {
             self.points.deskew(v, dt);

@@ -22,7 +22,7 @@
 //! let detection = detector.detect(&scan);
 //! assert_eq!(detection.lines.len(), 1);
 //! let wall = &detection.lines[0].line;
-//! assert!((wall.d - 2.0).abs() < 1e-6 && wall.alpha.abs() < 1e-6);
+//! assert!((wall.d() - 2.0).abs() < 1e-6 && wall.alpha().abs() < 1e-6);
 //! ```
 
 mod config;
@@ -40,7 +40,9 @@ pub use pcaline_geometry as geometry;
 pub use pcaline_mapping as mapping;
 pub use pcaline_segmentation as segmentation;
 
-pub use pcaline_geometry::{ConfigError, LineSegment, Point2, Pose2, RangeNoise, Scan, Vector2};
+pub use pcaline_geometry::{
+    ConfigError, LineSegment, Point2, Pose2, RangeNoise, Scan, Twist2, Vector2,
+};
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

@@ -5,7 +5,7 @@ use crate::{Config, DetectedLine, LineDetector};
 use pcaline_aiding::{
     AidingConfig, Localizer, LoopClosing, LoopClosureConfig, OptimizeReport, StepReport,
 };
-use pcaline_geometry::{ConfigError, Pose2, Scan};
+use pcaline_geometry::{ConfigError, Pose2, Scan, Twist2};
 use pcaline_mapping::{LineMap, MapConfig};
 
 /// Configuration of a [`Mapper`]. With feature `serde` it (de)serializes,
@@ -117,7 +117,7 @@ pub struct MapperStep {
 /// let scan = Scan::new(angle_min, inc, 0.1, 30.0, ranges);
 /// let step = mapper.process(&scan, &Pose2::identity());
 /// assert_eq!(step.lines, 1);
-/// assert_eq!(mapper.lines()[0].line.n_points, 241);
+/// assert_eq!(mapper.lines()[0].line.n_points(), 241);
 /// assert_eq!(mapper.map().len(), 1);
 /// ```
 #[derive(Debug, Clone)]
@@ -136,7 +136,7 @@ impl Mapper {
     /// A mapper with an empty map.
     pub fn new(config: MapperConfig) -> Result<Self, ConfigError> {
         let mount = config.vehicle_from_sensor;
-        for (name, v) in [("x", mount.x), ("y", mount.y), ("heading", mount.heading)] {
+        for (name, v) in [("x", mount.x()), ("y", mount.y()), ("heading", mount.heading())] {
             ConfigError::check_field(
                 v.is_finite(),
                 "vehicle_from_sensor",
@@ -194,7 +194,7 @@ impl Mapper {
 
     /// Detects the scan's lines, deskewed with `velocity` when the scan
     /// carries its beam timing.
-    fn detect(&mut self, scan: &Scan, velocity: Option<Pose2>) {
+    fn detect(&mut self, scan: &Scan, velocity: Option<Twist2>) {
         let detection = self.detector.detect_moving(scan, velocity.as_ref());
         self.detected.clear();
         self.detected.extend_from_slice(detection.lines);
@@ -275,9 +275,9 @@ mod mount_tests {
         let mut mounted =
             Mapper::new(MapperConfig { vehicle_from_sensor, ..MapperConfig::default() }).unwrap();
         let close = |a: &Pose2, b: &Pose2| {
-            (a.x - b.x).abs() < 1e-6
-                && (a.y - b.y).abs() < 1e-6
-                && pcaline_geometry::wrap_angle(a.heading - b.heading).abs() < 1e-9
+            (a.x() - b.x()).abs() < 1e-6
+                && (a.y() - b.y()).abs() < 1e-6
+                && pcaline_geometry::wrap_angle(a.heading() - b.heading()).abs() < 1e-9
         };
         for frame in sim.frames().step_by(4) {
             let world_from_sensor = frame.odometry_pose;
@@ -292,7 +292,7 @@ mod mount_tests {
         assert_eq!(plain.map().len(), mounted.map().len());
         let (p, m) = (plain.pose().unwrap(), mounted.pose().unwrap());
         assert!(close(&m, &p.compose(&sensor_from_vehicle)));
-        let bad = Pose2 { x: f64::NAN, ..Pose2::identity() };
+        let bad = Pose2::new(f64::NAN, 0.0, 0.0);
         let e = Mapper::new(MapperConfig { vehicle_from_sensor: bad, ..MapperConfig::default() });
         assert!(e.unwrap_err().to_string().contains("vehicle_from_sensor.x"));
     }

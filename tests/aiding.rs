@@ -134,7 +134,7 @@ fn a_known_rotation_of_the_source_is_undone() {
         // From scan 100 on, the source's heading jumps by 3°.
         let mut source = frame.true_pose;
         if k >= 100 {
-            source = Pose2::new(source.x, source.y, source.heading + 3f64.to_radians());
+            source = Pose2::new(source.x(), source.y(), source.heading() + 3f64.to_radians());
         }
         let step = mapper.process(&frame.scan, &source);
         if k == 100 {
@@ -145,7 +145,7 @@ fn a_known_rotation_of_the_source_is_undone() {
                 step.report
             );
         }
-        let err = pcaline::geometry::wrap_angle(step.pose.heading - frame.true_pose.heading);
+        let err = pcaline::geometry::wrap_angle(step.pose.heading() - frame.true_pose.heading());
         assert!(
             err.abs() < 0.3f64.to_radians(),
             "scan {k}: heading error {:.3}°",

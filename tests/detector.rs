@@ -25,9 +25,10 @@ fn corner_gives_two_lines_with_exact_parameters() {
     for (name, config) in presets() {
         let mut det = LineDetector::new(config).unwrap();
         let lines: Vec<_> = det.detect(&scan).lines.iter().map(|l| l.line).collect();
-        let vertical = lines.iter().find(|l| l.alpha.abs() < 1e-3 && (l.d - 3.0).abs() < 1e-3);
-        let horizontal =
-            lines.iter().find(|l| (l.alpha - FRAC_PI_2).abs() < 1e-3 && (l.d - 2.0).abs() < 1e-3);
+        let vertical = lines.iter().find(|l| l.alpha().abs() < 1e-3 && (l.d() - 3.0).abs() < 1e-3);
+        let horizontal = lines
+            .iter()
+            .find(|l| (l.alpha() - FRAC_PI_2).abs() < 1e-3 && (l.d() - 2.0).abs() < 1e-3);
         assert!(vertical.is_some() && horizontal.is_some(), "{name}: {lines:#?}");
         let v = vertical.unwrap();
         assert!(v.length() > 5.0, "{name}: vertical wall only {} m", v.length());
@@ -42,7 +43,7 @@ fn parallel_walls_at_a_depth_jump_stay_apart() {
     for (name, config) in presets() {
         let mut det = LineDetector::new(config).unwrap();
         let d = det.detect(&scan);
-        let mut ds: Vec<f64> = d.lines.iter().map(|l| l.line.d).collect();
+        let mut ds: Vec<f64> = d.lines.iter().map(|l| l.line.d()).collect();
         ds.sort_by(f64::total_cmp);
         assert_eq!(ds.len(), 2, "{name}: {:#?}", d.lines);
         assert!((ds[0] - 2.0).abs() < 1e-6 && (ds[1] - 3.0).abs() < 1e-6, "{name}: {ds:?}");
@@ -63,7 +64,7 @@ fn vertical_and_horizontal_walls_and_a_wall_through_the_x_axis() {
             let d_ = det.detect(&scan);
             assert_eq!(d_.lines.len(), 1, "{name}: {:#?}", d_.lines);
             let l = d_.lines[0].line;
-            assert!((l.alpha - alpha).abs() < 1e-6 && (l.d - d).abs() < 1e-6, "{name}: {l:?}");
+            assert!((l.alpha() - alpha).abs() < 1e-6 && (l.d() - d).abs() < 1e-6, "{name}: {l:?}");
         }
     }
     // A wall crossing the x axis ahead (the line x = 5 crosses the sensor's
@@ -118,7 +119,7 @@ fn wall_across_the_seam_of_a_360_scan_is_one_line() {
             let mut det = LineDetector::new(config).unwrap();
             let d = det.detect(&scan);
             let behind: Vec<_> =
-                d.lines.iter().filter(|l| (l.line.alpha.abs() - PI).abs() < 1e-3).collect();
+                d.lines.iter().filter(|l| (l.line.alpha().abs() - PI).abs() < 1e-3).collect();
             assert_eq!(behind.len(), 1, "{name}: {:#?}", d.lines);
             assert!(behind[0].line.length() > 3.9, "{name}: {:?}", behind[0].line);
             assert!(behind[0].first_beam > behind[0].last_beam, "{name}: crosses the seam");
@@ -197,7 +198,7 @@ fn bad_scans_give_no_lines_and_no_panic() {
     let mut det = LineDetector::new(Config::paper()).unwrap();
     for scan in &cases {
         for l in det.detect(scan).lines {
-            assert!(l.line.alpha.is_finite() && l.line.d.is_finite(), "{scan:?}");
+            assert!(l.line.alpha().is_finite() && l.line.d().is_finite(), "{scan:?}");
             assert!(l.line.length() < 1e-3, "a {} m line from {scan:?}", l.line.length());
         }
     }
@@ -255,8 +256,8 @@ fn noisy_room_default_finds_the_walls() {
             .lines
             .iter()
             .filter(|l| {
-                wrap_angle(l.line.alpha - alpha).abs() < 1f64.to_radians()
-                    && (l.line.d - dist).abs() < 0.02
+                wrap_angle(l.line.alpha() - alpha).abs() < 1f64.to_radians()
+                    && (l.line.d() - dist).abs() < 0.02
             })
             .collect();
         assert_eq!(hits.len(), runs, "wall ({alpha}, {dist}): {:#?}", d.lines);
@@ -276,7 +277,7 @@ proptest! {
             let mut det = LineDetector::new(config).unwrap();
             let d = det.detect(&scan);
             for l in d.lines {
-                prop_assert!(l.line.alpha.is_finite() && l.line.d.is_finite() && l.line.d >= 0.0);
+                prop_assert!(l.line.alpha().is_finite() && l.line.d().is_finite() && l.line.d() >= 0.0);
             }
         }
     }
@@ -317,13 +318,16 @@ proptest! {
             }
         }
         // Paper: the only test is the eigenvalue ratio, which bounds the
-        // residual by the spread along the line: lambda_min < lambda_max / ETh.
+        // residual by the spread along the line: lambda_min < lambda_max / ETh,
+        // residual² = lambda_min n / (n - 2) (unbiased), and lambda_max is at
+        // most (length / 2)² for points spread over the segment (plus noise).
         let mut det = LineDetector::new(Config::paper()).unwrap();
         let d = det.detect(&scan);
         for l in d.lines {
-            let spread = l.line.length() / 12f64.sqrt();
-            prop_assert!(l.line.residual_std < 1.5 * spread / 50f64.sqrt() + 6.0 * sigma + 1e-3,
-                "residual {} for a {} m line", l.line.residual_std, l.line.length());
+            let n = l.line.n_points() as f64;
+            let bound = (n / (n - 2.0) / 50.0).sqrt() * l.line.length() / 2.0;
+            prop_assert!(l.line.residual_std() < bound + 6.0 * sigma + 1e-3,
+                "residual {} for a {} m line", l.line.residual_std(), l.line.length());
         }
     }
 }

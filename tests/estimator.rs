@@ -151,7 +151,7 @@ fn bad_sources_get_reported_fallbacks_never_nan() {
             }
             150 => {
                 // A 10 m teleport of the source.
-                source = Pose2::new(source.x + 10.0, source.y, source.heading);
+                source = Pose2::new(source.x() + 10.0, source.y(), source.heading());
                 Some(Fallback::SourceJump)
             }
             200 => {
@@ -168,13 +168,14 @@ fn bad_sources_get_reported_fallbacks_never_nan() {
         if k == 151 {
             // The jump is not followed: the source's next increment is, from
             // the pose the estimator kept.
-            let err = (step.pose.x - frame.true_pose.x).hypot(step.pose.y - frame.true_pose.y);
+            let err =
+                (step.pose.x() - frame.true_pose.x()).hypot(step.pose.y() - frame.true_pose.y());
             assert!(err < 0.2, "scan {k}: {err:.3} m off after a 10 m source jump");
         }
     }
     let end = mapper.pose().unwrap();
     let truth = sim.true_poses()[299];
-    assert!((end.x - truth.x).hypot(end.y - truth.y) < 0.1, "{end:?} vs {truth:?}");
+    assert!((end.x() - truth.x()).hypot(end.y() - truth.y()) < 0.1, "{end:?} vs {truth:?}");
     // The paper's preset is kept exactly, for reproduction.
     assert_eq!(MapperConfig::paper().aiding, AidingConfig::paper());
 }

@@ -65,7 +65,7 @@ fn csail_raw_odometry_heading_is_ahead_of_the_estimator_alone() {
         let (k, j) = (slam.keyframes()[r.keyframe].scan, slam.keyframes()[r.candidate].scan);
         let (Some(tk), Some(tj)) = (truth_at(k), truth_at(j)) else { continue };
         let e = tj.between(&tk).between(&r.candidate_from_current);
-        assert!(e.x.hypot(e.y) < 0.5, "a false loop stands: {r:?}, off by {e:?}");
+        assert!(e.x().hypot(e.y()) < 0.5, "a false loop stands: {r:?}, off by {e:?}");
         checked += 1;
     }
     let picked: Vec<Pose2> = pairs.iter().map(|p| poses[p.raw_index]).collect();
@@ -134,7 +134,7 @@ fn the_large_building_closes_no_false_loop() {
     for r in slam.loops().iter().filter(|r| r.outcome == LoopOutcome::Accepted) {
         let (k, j) = (slam.keyframes()[r.keyframe].scan, slam.keyframes()[r.candidate].scan);
         let e = truth[j].between(&truth[k]).between(&r.candidate_from_current);
-        assert!(e.x.hypot(e.y) < 0.2, "a false loop stands: {r:?}, off by {e:?}");
+        assert!(e.x().hypot(e.y()) < 0.2, "a false loop stands: {r:?}, off by {e:?}");
     }
     let scores = run.scores(truth).unwrap();
     let (alone, loops) = (&scores[0].errors, &scores[1].errors);

@@ -59,7 +59,7 @@ fn utm30lx_lines_are_centimetre_level() {
     read_log(&path, &LogOptions::default(), |r| {
         if let LogRecord::Scan(s) = r {
             beams = s.scan.len();
-            residuals.extend(detector.detect(&s.scan).lines.iter().map(|l| l.line.residual_std));
+            residuals.extend(detector.detect(&s.scan).lines.iter().map(|l| l.line.residual_std()));
         }
         ControlFlow::Continue(())
     })

@@ -45,15 +45,17 @@ fn noiseless_corridor_runs_are_all_detected() {
                 |beam: usize| sensor_from_world.transform_point(&frame.beams[beam].point.unwrap());
             let (p0, p1) = (seen(run.first_beam), seen(run.last_beam));
             let found = lines.iter().any(|l| {
-                let along = |p: &Point2<f64>| (p - l.start).dot(&l.direction);
-                let (d0, d1) =
-                    (along(&l.start).min(along(&l.end)), along(&l.start).max(along(&l.end)));
+                let along = |p: &Point2<f64>| (p - l.start()).dot(&l.direction());
+                let (d0, d1) = (
+                    along(&l.start()).min(along(&l.end())),
+                    along(&l.start()).max(along(&l.end())),
+                );
                 let (s0, s1) = (along(&p0).min(along(&p1)), along(&p0).max(along(&p1)));
                 let overlap = (d1.min(s1) - d0.max(s0)).max(0.0);
-                line_angle_diff(l.alpha, truth.alpha).abs() < 0.1f64.to_radians()
-                    && truth.signed_distance(&l.start).abs() < 0.005
-                    && truth.signed_distance(&l.end).abs() < 0.005
-                    && truth.signed_distance(&l.centroid).abs() < 0.005
+                line_angle_diff(l.alpha(), truth.alpha()).abs() < 0.1f64.to_radians()
+                    && truth.signed_distance(&l.start()).abs() < 0.005
+                    && truth.signed_distance(&l.end()).abs() < 0.005
+                    && truth.signed_distance(&l.centroid()).abs() < 0.005
                     && overlap >= 0.5 * (s1 - s0)
             });
             assert!(found, "scan {k}: run {run:?} of wall {wall:?} not found among {lines:#?}");

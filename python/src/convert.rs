@@ -100,7 +100,7 @@ pub fn pose_from(t: (f64, f64, f64), name: &str) -> PyResult<Pose2> {
 
 /// A pose as `(x_m, y_m, heading_rad)`.
 pub fn pose_tuple(p: &Pose2) -> (f64, f64, f64) {
-    (p.x, p.y, p.heading)
+    (p.x(), p.y(), p.heading())
 }
 
 /// Poses as an `(n, 3)` array; `None` rows are NaN.
@@ -109,7 +109,7 @@ pub fn poses_array<'py>(
     poses: impl Iterator<Item = Option<Pose2>>,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
     let flat: Vec<f64> =
-        poses.flat_map(|p| p.map_or([f64::NAN; 3], |p| [p.x, p.y, p.heading])).collect();
+        poses.flat_map(|p| p.map_or([f64::NAN; 3], |p| [p.x(), p.y(), p.heading()])).collect();
     rows_array(py, 3, flat)
 }
 

@@ -151,46 +151,49 @@ impl PyLines {
     /// Normal angle of each line, radians (eq. 6).
     #[getter]
     fn alpha<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.column(py, |l| l.alpha)
+        self.column(py, |l| l.alpha())
     }
 
     /// Distance of each line from the origin, metres (eq. 6, `>= 0`).
     #[getter]
     fn d<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.column(py, |l| l.d)
+        self.column(py, |l| l.d())
     }
 
     /// First endpoints, `(n, 2)`, metres.
     #[getter]
     fn start<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.points(py, |l| l.start)
+        self.points(py, |l| l.start())
     }
 
     /// Last endpoints, `(n, 2)`, metres.
     #[getter]
     fn end<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.points(py, |l| l.end)
+        self.points(py, |l| l.end())
     }
 
     /// Endpoints as `(n, 2, 2)`: `[line][start|end][x|y]`, what
     /// `matplotlib.collections.LineCollection` takes.
     #[getter]
     fn segments_xy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let flat =
-            self.lines.iter().flat_map(|l| [l.start.x, l.start.y, l.end.x, l.end.y]).collect();
+        let flat = self
+            .lines
+            .iter()
+            .flat_map(|l| [l.start().x, l.start().y, l.end().x, l.end().y])
+            .collect();
         matrices_array(py, flat)
     }
 
     /// Centroids of the fitted points, `(n, 2)`, metres.
     #[getter]
     fn centroid<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.points(py, |l| l.centroid)
+        self.points(py, |l| l.centroid())
     }
 
     /// Unit directions, start to end, `(n, 2)`.
     #[getter]
     fn direction<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.points(py, |l| Point2::from(l.direction))
+        self.points(py, |l| Point2::from(l.direction()))
     }
 
     /// Lengths, metres.
@@ -202,13 +205,13 @@ impl PyLines {
     /// Points fitted (0 for lines made from endpoints).
     #[getter]
     fn n_points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
-        PyArray1::from_iter(py, self.lines.iter().map(|l| l.n_points as u64))
+        PyArray1::from_iter(py, self.lines.iter().map(|l| l.n_points() as u64))
     }
 
     /// Residual standard deviation of the fitted points, metres.
     #[getter]
     fn residual_std<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.column(py, |l| l.residual_std)
+        self.column(py, |l| l.residual_std())
     }
 
     /// Covariance of `(alpha, d)` of each line, `(n, 2, 2)` (eq. 7).
@@ -218,7 +221,7 @@ impl PyLines {
             .lines
             .iter()
             .flat_map(|l| {
-                let c = &l.covariance;
+                let c = &l.covariance();
                 [c[(0, 0)], c[(0, 1)], c[(1, 0)], c[(1, 1)]]
             })
             .collect();

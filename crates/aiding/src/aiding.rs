@@ -13,7 +13,7 @@ use crate::{
 };
 use crate::{PoseWindow, WindowStep};
 use pcaline_fitting::Moments;
-use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Vector2};
+use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2};
 use pcaline_mapping::{LineId, LineMap, LineStatus, MapConfig, MapLine, MatchGate};
 
 /// A detected line in the sensor frame with the moments of its points.
@@ -114,9 +114,9 @@ pub struct Aiding {
     /// The time since the previous scan, when both were stamped.
     last_dt_s: Option<f64>,
     /// The estimated velocity over the last step, smoothed (for deskew).
-    velocity: Option<Pose2>,
+    velocity: Option<Twist2>,
     /// The same over the last step alone (for the constant-velocity prediction).
-    last_velocity: Option<Pose2>,
+    last_velocity: Option<Twist2>,
     /// The source's systematic errors.
     calibration: SourceCalibration,
     /// The predicted step in the world frame (for the calibration).
@@ -183,7 +183,7 @@ impl Aiding {
         if let Some(p) = self.corrected {
             self.corrected = Some(new_world_from_old.compose(&p));
         }
-        let (s, c) = new_world_from_old.heading.sin_cos();
+        let (s, c) = new_world_from_old.heading().sin_cos();
         let rotation = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
         self.covariance = rotation * self.covariance * rotation.transpose();
         self.window = None;
@@ -219,7 +219,7 @@ impl Aiding {
     /// The velocity estimated over the last step (metres and radians per
     /// second, in the frame of the pose before it), when both scans were
     /// stamped: what motion deskew of the next scan uses.
-    pub fn velocity(&self) -> Option<Pose2> {
+    pub fn velocity(&self) -> Option<Twist2> {
         self.velocity
     }
 
@@ -307,7 +307,7 @@ impl Aiding {
             // most the largest acceleration over it, plus the error of a
             // velocity differenced from two estimated poses.
             (Some(v), Some(dt)) if dt > 0.0 => {
-                let motion = Pose2::new(v.x * dt, v.y * dt, v.heading * dt);
+                let motion = Pose2::new(v.vx_mps * dt, v.vy_mps * dt, v.yaw_rate_radps * dt);
                 let a = e.max_acceleration;
                 let noise = MotionNoise::floors(
                     (a.linear_m_s2 * dt * dt).max(1e-3),
@@ -336,8 +336,8 @@ impl Aiding {
         }
         let previous = self.corrected.unwrap_or_default();
         let e = &self.config.estimator;
-        let jumped = increment.x.hypot(increment.y) > e.max_source_step_m
-            || increment.heading.abs() > e.max_source_turn_rad;
+        let jumped = increment.x().hypot(increment.y()) > e.max_source_step_m
+            || increment.heading().abs() > e.max_source_turn_rad;
         let dt = self.step_dt();
         let (increment, noise, prediction, fallback) = if jumped {
             let motion = self.last_motion.unwrap_or_default();
@@ -352,7 +352,7 @@ impl Aiding {
         let (predicted, mut cov) = predict(&previous, &self.covariance, &increment, &noise);
         self.pending_step = Some((increment, noise.covariance(&increment)));
         // The calibration's own uncertainty over the step.
-        self.step_world = Vector2::new(predicted.x - previous.x, predicted.y - previous.y);
+        self.step_world = Vector2::new(predicted.x() - previous.x(), predicted.y() - previous.y());
         cov[(2, 2)] += var_heading;
         let len = self.step_world.norm();
         if len > 0.0 {
@@ -452,11 +452,7 @@ impl Aiding {
         };
         self.last_velocity = raw;
         self.velocity = match (self.velocity, raw) {
-            (Some(v), Some(r)) => Some(Pose2 {
-                x: 0.75 * v.x + 0.25 * r.x,
-                y: 0.75 * v.y + 0.25 * r.y,
-                heading: 0.75 * v.heading + 0.25 * r.heading,
-            }),
+            (Some(v), Some(r)) => Some(v.lerp(&r, 0.25)),
             (_, r) => r,
         };
         self.corrected = Some(pose);
@@ -522,7 +518,7 @@ impl Aiding {
     ) -> Vec<(usize, usize, LineMeasurement)> {
         let e = self.config.estimator;
         let r_scale = self.measurement_noise_scale;
-        let viewpoint = Point2::new(predicted.x, predicted.y);
+        let viewpoint = Point2::new(predicted.x(), predicted.y());
         let sigma_heading = predicted_cov[(2, 2)].max(0.0).sqrt();
         let sigma_position = (predicted_cov[(0, 0)] + predicted_cov[(1, 1)]).max(0.0).sqrt();
         let map_gate = MatchGate::of(self.map.config());
@@ -530,7 +526,7 @@ impl Aiding {
         for (i, (sensor, (world, _))) in
             lines.iter().zip(self.world_lines(predicted, lines)).enumerate()
         {
-            let lever = (world.centroid - viewpoint).norm();
+            let lever = (world.centroid() - viewpoint).norm();
             let offset_gate = (3.5 * (sigma_position + lever * sigma_heading))
                 .max(map_gate.max_offset_m.unwrap_or(0.0))
                 .min(e.max_gate_offset_m);
@@ -597,7 +593,7 @@ impl Aiding {
         lines: &[impl ObservedLine],
         report: &mut StepReport,
     ) -> Vec<(usize, usize)> {
-        gated.sort_by_key(|(i, _, _)| std::cmp::Reverse(lines[*i].line().n_points));
+        gated.sort_by_key(|(i, _, _)| std::cmp::Reverse(lines[*i].line().n_points()));
         let measurements: Vec<LineMeasurement> = gated.iter().map(|g| g.2).collect();
         let flags = joint_consistent(
             &measurements,
@@ -653,7 +649,7 @@ impl Aiding {
             .map(|&(i, j)| (*lines[i].line(), self.map.lines()[j].clone()))
             .collect();
         report.heading_correction_rad =
-            pcaline_geometry::wrap_angle(update.pose.heading - predicted.heading);
+            pcaline_geometry::wrap_angle(update.pose.heading() - predicted.heading());
         if let Some(c) = e.calibration {
             // Known defect (docs/accuracy.md): the translation correction is
             // still zero here, so the speed scale does not learn.
@@ -667,7 +663,7 @@ impl Aiding {
             );
         }
         report.translation_correction_m =
-            Vector2::new(update.pose.x - predicted.x, update.pose.y - predicted.y);
+            Vector2::new(update.pose.x() - predicted.x(), update.pose.y() - predicted.y());
         report.constrained_directions = constrained_directions(&update.covariance, predicted_cov);
         self.covariance = update.covariance;
         (update.pose, report, true)
@@ -733,7 +729,7 @@ impl Aiding {
                 _ => 1,
             };
             for round in 0..rounds {
-                let viewpoint = Point2::new(pose.x, pose.y);
+                let viewpoint = Point2::new(pose.x(), pose.y());
                 let world = self.world_lines(&pose, lines);
                 let matches: Vec<_> = world
                     .iter()
@@ -754,8 +750,8 @@ impl Aiding {
                     HeadingWeights::InverseVariance { floor_rad } => {
                         weighted_offset(matches.iter().map(|(l, m)| {
                             let map_line = &self.map.lines()[m.index].line;
-                            let var = l.covariance[(0, 0)]
-                                + map_line.covariance[(0, 0)]
+                            let var = l.covariance()[(0, 0)]
+                                + map_line.covariance()[(0, 0)]
                                 + floor_rad * floor_rad;
                             (m.distance.d_alpha, 1.0 / var)
                         }))
@@ -769,20 +765,20 @@ impl Aiding {
                     .clamp(-self.config.max_heading_step_rad, self.config.max_heading_step_rad);
                 let position = match previous {
                     Some(prev) if round == 0 => rotate_step(
-                        &Point2::new(prev.x, prev.y),
-                        &Point2::new(pose.x, pose.y),
+                        &Point2::new(prev.x(), prev.y()),
+                        &Point2::new(pose.x(), pose.y()),
                         dgamma,
                     ),
                     // Later rounds rotate about the sensor (the step is already placed).
-                    _ => Point2::new(pose.x, pose.y),
+                    _ => Point2::new(pose.x(), pose.y()),
                 };
-                pose = Pose2::new(position.x, position.y, pose.heading + dgamma);
+                pose = Pose2::new(position.x, position.y, pose.heading() + dgamma);
                 report.heading_correction_rad += dgamma;
                 if self.config.mode != AidingMode::FullPose {
                     continue;
                 }
                 // Translation from the matched lines' normal offsets.
-                let viewpoint = Point2::new(pose.x, pose.y);
+                let viewpoint = Point2::new(pose.x(), pose.y());
                 let world = self.world_lines(&pose, lines);
                 let constraints: Vec<NormalConstraint> = world
                     .iter()
@@ -790,11 +786,11 @@ impl Aiding {
                         let m = self.map.find_match_seen_from(l, Some(&viewpoint))?;
                         let map_line = &self.map.lines()[m.index].line;
                         let n = map_line.normal();
-                        let var = l.residual_std.powi(2) / l.n_points.max(1) as f64
+                        let var = l.residual_std().powi(2) / l.n_points().max(1) as f64
                             + self.config.offset_floor_m.powi(2);
                         Some(NormalConstraint {
                             normal: n,
-                            offset_m: map_line.d - n.dot(&l.centroid.coords),
+                            offset_m: map_line.d() - n.dot(&l.centroid().coords),
                             weight: 1.0 / var,
                         })
                     })
@@ -811,7 +807,7 @@ impl Aiding {
                 } else {
                     t
                 };
-                pose = Pose2::new(pose.x + t.x, pose.y + t.y, pose.heading);
+                pose = Pose2::new(pose.x() + t.x, pose.y() + t.y, pose.heading());
                 report.translation_correction_m += t;
                 report.constrained_directions = fix.constrained_directions;
             }
@@ -940,8 +936,8 @@ mod tests {
             // The source claims a step of 0.1 m along and across the corridor.
             let (pose, report) = a.step(&Pose2::new(0.1, 0.05, 0.0), &lines);
             assert_eq!(report.constrained_directions, 1, "{report:?}");
-            assert!(pose.y.abs() < 1e-6, "across the walls the lines pull back: {pose:?}");
-            assert!((pose.x - 0.1).abs() < 1e-6, "along the walls nothing is known: {pose:?}");
+            assert!(pose.y().abs() < 1e-6, "across the walls the lines pull back: {pose:?}");
+            assert!((pose.x() - 0.1).abs() < 1e-6, "along the walls nothing is known: {pose:?}");
         }
     }
 
@@ -952,7 +948,7 @@ mod tests {
         let (pose, report) = a.step(&Pose2::new(0.08, -0.05, 0.02), &room());
         assert_eq!(report.constrained_directions, 2);
         assert!(
-            pose.x.abs() < 1e-3 && pose.y.abs() < 1e-3 && pose.heading.abs() < 1e-6,
+            pose.x().abs() < 1e-3 && pose.y().abs() < 1e-3 && pose.heading().abs() < 1e-6,
             "{pose:?}"
         );
     }
@@ -1006,9 +1002,9 @@ mod tests {
             let source = Pose2::new(0.01 * k as f64, 0.0, 0.001 * k as f64);
             let (pose, report) = a.step_at(0.1 * k as f64, &source, &room_seen_from(&source));
             assert!(
-                (pose.x - source.x).abs() < 1e-3
-                    && (pose.y - source.y).abs() < 1e-3
-                    && (pose.heading - source.heading).abs() < 1e-4,
+                (pose.x() - source.x()).abs() < 1e-3
+                    && (pose.y() - source.y()).abs() < 1e-3
+                    && (pose.heading() - source.heading()).abs() < 1e-4,
                 "step {k}: {pose:?} vs {source:?} ({report:?})"
             );
         }
@@ -1024,9 +1020,9 @@ mod tests {
             let t = 0.1 * k as f64;
             let truth = Pose2::new(0.005 * k as f64, 0.0, 0.0);
             // A gyro-like bias of 0.5°/s in the source.
-            let source = Pose2::new(truth.x, truth.y, 0.5f64.to_radians() * t);
+            let source = Pose2::new(truth.x(), truth.y(), 0.5f64.to_radians() * t);
             let (pose, _) = a.step_at(t, &source, &room_seen_from(&truth));
-            let err = (pose.heading - truth.heading).abs();
+            let err = (pose.heading() - truth.heading()).abs();
             worst = worst.max(err);
             if k > 100 {
                 late = late.max(err);
@@ -1056,7 +1052,7 @@ mod tests {
         let mut lines = room_seen_from(&Pose2::identity());
         lines.push(wall((1.88, -1.0), (1.88, 1.0)));
         let (pose, report) = a.step_at(0.4, &Pose2::identity(), &lines);
-        assert!(pose.x.abs() < 2e-3 && pose.y.abs() < 2e-3, "{pose:?} {report:?}");
+        assert!(pose.x().abs() < 2e-3 && pose.y().abs() < 2e-3, "{pose:?} {report:?}");
         assert!(report.matches >= 3, "{report:?}");
         assert!(report.rejected_joint + report.rejected_gate + report.ambiguous >= 1, "{report:?}");
     }
@@ -1070,8 +1066,8 @@ mod tests {
                 a.step_without_source(Some(0.025 * k as f64), &room_seen_from(&truth));
             assert_eq!(report.prediction, crate::Prediction::ConstantVelocity);
             assert!(
-                (pose.x - truth.x).hypot(pose.y - truth.y) < 0.01
-                    && (pose.heading - truth.heading).abs() < 0.2f64.to_radians(),
+                (pose.x() - truth.x()).hypot(pose.y() - truth.y()) < 0.01
+                    && (pose.heading() - truth.heading()).abs() < 0.2f64.to_radians(),
                 "scan {k}: {pose:?} vs {truth:?}"
             );
         }

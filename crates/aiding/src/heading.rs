@@ -54,7 +54,7 @@ pub fn weighted_offset(pairs: impl IntoIterator<Item = (f64, f64)>) -> Option<f6
 /// counter-clockwise frame a heading too small by `dgamma` bends the step by
 /// `-dgamma`, which `R(+dgamma)` undoes.)
 pub fn rotate_step(previous: &Point2<f64>, predicted: &Point2<f64>, dgamma: f64) -> Point2<f64> {
-    previous + Pose2 { x: 0.0, y: 0.0, heading: dgamma }.rotate(&(predicted - previous))
+    previous + Pose2::new(0.0, 0.0, dgamma).rotate(&(predicted - previous))
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@
 //! aiding.step(&Pose2::identity(), &[wall]);
 //! // The source claims the sensor turned by 0.05 rad; the wall says it did not.
 //! let (pose, report) = aiding.step(&Pose2::new(0.0, 0.0, 0.05), &[wall]);
-//! assert!(pose.heading.abs() < 1e-9);
+//! assert!(pose.heading().abs() < 1e-9);
 //! assert_eq!(report.matches, 1);
 //! ```
 

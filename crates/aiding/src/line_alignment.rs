@@ -170,14 +170,14 @@ struct Seg {
 
 impl Seg {
     fn of(l: &LineSegment) -> Option<Seg> {
-        let v = l.end - l.start;
+        let v = l.end() - l.start();
         let len = v.norm();
         if len.is_nan() || len <= 1e-6 || !len.is_finite() {
             return None;
         }
         let dir = v / len;
         let n = Vector2::new(-dir.y, dir.x);
-        Some(Seg { start: l.start, end: l.end, dir, n, d: n.dot(&l.start.coords), len })
+        Some(Seg { start: l.start(), end: l.end(), dir, n, d: n.dot(&l.start().coords), len })
     }
 
     fn moved(&self, t: &Pose2) -> Seg {
@@ -290,8 +290,8 @@ fn matches(
 /// let shift = Pose2::new(0.5, -0.2, 0.1);
 /// let seen: Vec<_> = room.iter().map(|l| l.transformed(&shift.inverse())).collect();
 /// let a = align_lines(&seen, &room, None, &AlignmentConfig::standard()).unwrap();
-/// assert!((a.candidate_from_current.x - 0.5).abs() < 1e-6);
-/// assert!((a.candidate_from_current.heading - 0.1).abs() < 1e-6);
+/// assert!((a.candidate_from_current.x() - 0.5).abs() < 1e-6);
+/// assert!((a.candidate_from_current.heading() - 0.1).abs() < 1e-6);
 /// ```
 pub fn align_lines(
     current: &[LineSegment],
@@ -380,8 +380,8 @@ pub fn align_lines(
                     let t = Pose2::new(q.x - moved.x, q.y - moved.y, rotation);
                     if let Some(prior) = prior {
                         let e = prior.candidate_from_current;
-                        if (t.x - e.x).hypot(t.y - e.y) > prior.radius_m
-                            || wrap_angle(t.heading - e.heading).abs() > prior.max_rotation_rad
+                        if (t.x() - e.x()).hypot(t.y() - e.y()) > prior.radius_m
+                            || wrap_angle(t.heading() - e.heading()).abs() > prior.max_rotation_rad
                         {
                             continue;
                         }
@@ -411,8 +411,8 @@ pub fn align_lines(
     a.runner_up_length_m = scored
         .iter()
         .filter(|(_, h)| {
-            (h.x - t.x).hypot(h.y - t.y) > DISTINCT_M
-                || wrap_angle(h.heading - t.heading).abs() > DISTINCT_RAD
+            (h.x() - t.x()).hypot(h.y() - t.y()) > DISTINCT_M
+                || wrap_angle(h.heading() - t.heading()).abs() > DISTINCT_RAD
         })
         .map(|(s, _)| *s)
         .fold(0.0, f64::max);
@@ -435,7 +435,7 @@ fn refine(cur: &[Seg], cand: &[Seg], mut t: Pose2, config: &AlignmentConfig) -> 
         if !step.iter().all(|v| v.is_finite()) {
             return None;
         }
-        t = Pose2::new(t.x + step.x, t.y + step.y, wrap_angle(t.heading + step.z));
+        t = Pose2::new(t.x() + step.x, t.y() + step.y, wrap_angle(t.heading() + step.z));
         if step.norm() < 1e-9 {
             break;
         }
@@ -572,7 +572,7 @@ mod tests {
         let seen: Vec<_> = room().iter().map(|l| l.transformed(&truth.inverse())).collect();
         let a = align_lines(&seen, &room(), None, &AlignmentConfig::standard()).unwrap();
         let e = a.candidate_from_current.between(&truth);
-        assert!(e.x.hypot(e.y) < 1e-6 && e.heading.abs() < 1e-6, "{e:?}");
+        assert!(e.x().hypot(e.y()) < 1e-6 && e.heading().abs() < 1e-6, "{e:?}");
         assert_eq!(a.matches, 8);
         assert!(a.weakest_direction_m > 5.0);
         assert!(a.rms_m < 1e-6);
@@ -599,7 +599,7 @@ mod tests {
             AlignmentPrior { candidate_from_current: near, radius_m: 1.0, max_rotation_rad: 0.1 };
         let a = align_lines(&seen, &corridor, Some(&prior), &config).unwrap();
         let e = a.candidate_from_current.between(&truth);
-        assert!(e.x.hypot(e.y) < 1e-6 && e.heading.abs() < 1e-6, "{e:?}");
+        assert!(e.x().hypot(e.y()) < 1e-6 && e.heading().abs() < 1e-6, "{e:?}");
         // Without the cross wall the along-corridor offset is unobservable.
         let walls = &corridor[..2];
         let seen: Vec<_> = walls.iter().map(|l| l.transformed(&truth.inverse())).collect();
@@ -649,8 +649,8 @@ mod tests {
         let config = AlignmentConfig::standard();
         assert!(align_lines(&[], &room(), None, &config).is_none());
         assert!(align_lines(&room()[..1], &room(), None, &config).is_none());
-        let mut bad = room()[0];
-        bad.end = bad.start;
+        let bad = room()[0].with_extent(0.0, 0.0);
+        assert_eq!(bad.length(), 0.0);
         assert!(align_lines(&[bad, bad], &room(), None, &config).is_none());
     }
 

@@ -77,11 +77,11 @@ pub fn measure(
 ) -> LineMeasurement {
     let m = &map.line;
     let n = m.normal();
-    let centroid = world_from_sensor.transform_point(&sensor.centroid);
-    let lever = centroid - Point2::new(world_from_sensor.x, world_from_sensor.y);
-    let alpha_placed = sensor.alpha + world_from_sensor.heading;
+    let centroid = world_from_sensor.transform_point(&sensor.centroid());
+    let lever = centroid - Point2::new(world_from_sensor.x(), world_from_sensor.y());
+    let alpha_placed = sensor.alpha() + world_from_sensor.heading();
     let residual =
-        Vector2::new(line_angle_diff(m.alpha, alpha_placed), m.d - n.dot(&centroid.coords));
+        Vector2::new(line_angle_diff(m.alpha(), alpha_placed), m.d() - n.dot(&centroid.coords));
     let dn_dheading = n.x * -lever.y + n.y * lever.x;
     #[rustfmt::skip]
     let jacobian = nalgebra::Matrix2x3::new(
@@ -89,14 +89,14 @@ pub fn measure(
         n.x, n.y, dn_dheading,
     );
     let var = |v: f64| if v.is_finite() && v > 0.0 { v } else { 0.0 };
-    let along = (centroid - m.centroid).dot(&m.direction);
+    let along = (centroid - m.centroid()).dot(&m.direction());
     let k = noise.line_variance_scale;
-    let var_alpha = k * (var(sensor.covariance[(0, 0)]) + var(m.covariance[(0, 0)]))
+    let var_alpha = k * (var(sensor.covariance()[(0, 0)]) + var(m.covariance()[(0, 0)]))
         + noise.alpha_floor_rad.powi(2);
     let var_offset = k
-        * (var(sensor.residual_std.powi(2) / sensor.n_points.max(1) as f64)
+        * (var(sensor.residual_std().powi(2) / sensor.n_points().max(1) as f64)
             + var(map.rms_m().powi(2) / map.moments.n.max(1) as f64)
-            + var(along * along * m.covariance[(0, 0)]))
+            + var(along * along * m.covariance()[(0, 0)]))
         + noise.offset_floor_m.powi(2);
     LineMeasurement {
         residual,
@@ -137,7 +137,7 @@ mod tests {
         let m0 = measure(&sensor, &map, &pose, &noise);
         let h = 1e-6;
         for k in 0..3 {
-            let mut d = [pose.x, pose.y, pose.heading];
+            let mut d = [pose.x(), pose.y(), pose.heading()];
             d[k] += h;
             let m1 = measure(&sensor, &map, &Pose2::new(d[0], d[1], d[2]), &noise);
             let numeric = -(m1.residual - m0.residual) / h;
@@ -160,10 +160,16 @@ mod tests {
         let map = MapLine::new(LineId(0), l, m, 0);
         let r = measure(&l, &map, &Pose2::identity(), &MeasurementNoise::standard()).residual;
         assert!(r.norm() < 1e-12, "{r}");
-        // Flipped direction: the same undirected line.
-        let mut flipped = l;
-        flipped.alpha = pcaline_geometry::wrap_angle(l.alpha + std::f64::consts::PI);
-        let r = measure(&flipped, &map, &Pose2::identity(), &MeasurementNoise::standard());
+        // Near the sensor the normal flips sides: a line 1 mm on the other
+        // side of the origin has its alpha half a turn away, yet it is the
+        // same undirected line 2 mm off.
+        let (near, nm) = line((-1.0, 0.001), (1.0, 0.001));
+        let map = MapLine::new(LineId(1), near, nm, 0);
+        let (other, _) = line((1.0, -0.001), (-1.0, -0.001));
+        let turn = pcaline_geometry::wrap_angle(other.alpha() - near.alpha());
+        assert!((turn.abs() - std::f64::consts::PI).abs() < 1e-9, "{turn}");
+        let r = measure(&other, &map, &Pose2::identity(), &MeasurementNoise::standard());
+        assert!((r.residual[1].abs() - 0.002).abs() < 1e-9, "{:?}", r.residual);
         assert!(r.residual[0].abs() < 1e-12, "{:?}", r.residual);
     }
 }

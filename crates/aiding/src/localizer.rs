@@ -3,7 +3,7 @@
 //! `pcaline map`, `pcaline eval --real`).
 
 use crate::{Aiding, AidingConfig, LoopClosing, LoopClosureConfig, ObservedLine, StepReport};
-use pcaline_geometry::{ConfigError, Pose2};
+use pcaline_geometry::{ConfigError, Pose2, Twist2};
 use pcaline_mapping::{LineMap, MapConfig};
 
 /// One localization loop: the aiding alone, or with loop closure on top.
@@ -51,7 +51,7 @@ impl Localizer {
     }
 
     /// The estimated velocity (for deskew without a source).
-    pub fn velocity(&self) -> Option<Pose2> {
+    pub fn velocity(&self) -> Option<Twist2> {
         self.aiding().velocity()
     }
 

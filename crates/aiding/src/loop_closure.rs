@@ -490,8 +490,8 @@ impl LoopClosing {
             None => true,
             Some(k) => {
                 let rel = k.between(&pose);
-                rel.x.hypot(rel.y) >= self.config.keyframe_distance_m
-                    || wrap_angle(rel.heading).abs() >= self.config.keyframe_turn_rad
+                rel.x().hypot(rel.y()) >= self.config.keyframe_distance_m
+                    || wrap_angle(rel.heading()).abs() >= self.config.keyframe_turn_rad
             }
         };
         // A scan the estimator skipped (its stamp went backwards, its source
@@ -519,7 +519,7 @@ impl LoopClosing {
                         * self.config.sequential_variance_scale);
                 self.graph.add_edge(node - 1, node, rel, cov, EdgeKind::Sequential);
                 (
-                    prev.path_m + rel.x.hypot(rel.y),
+                    prev.path_m + rel.x().hypot(rel.y()),
                     prev.chain_heading_var + cov[(2, 2)],
                     prev.chain_position_var + 0.5 * (cov[(0, 0)] + cov[(1, 1)]),
                 )
@@ -564,7 +564,7 @@ impl LoopClosing {
         let mut out = Vec::new();
         for k in range {
             let t = origin.between(&self.graph.nodes[k]);
-            let viewpoint = Point2::new(t.x, t.y);
+            let viewpoint = Point2::new(t.x(), t.y());
             out.extend(self.keyframes[k].lines.iter().map(|l| (l.line.transformed(&t), viewpoint)));
         }
         out
@@ -608,7 +608,7 @@ impl LoopClosing {
                 let rotation = (c.search_rotation_rad + c.search_sigmas * var_heading.sqrt())
                     .min(std::f64::consts::PI);
                 let n = self.graph.nodes[j];
-                let distance = (n.x - here.x).hypot(n.y - here.y);
+                let distance = (n.x() - here.x()).hypot(n.y() - here.y());
                 (distance <= radius).then_some((distance, j, radius, rotation))
             })
             .collect();
@@ -722,8 +722,8 @@ impl LoopClosing {
                 earlier.candidate_from_current.compose(&nodes[kp].between(&nodes[current]));
             let via_this = nodes[jp].between(&nodes[j]).compose(&a.candidate_from_current);
             let d = via_earlier.between(&via_this);
-            d.x.hypot(d.y) <= c.confirm_distance_m
-                && wrap_angle(d.heading).abs() <= c.confirm_rotation_rad
+            d.x().hypot(d.y()) <= c.confirm_distance_m
+                && wrap_angle(d.heading()).abs() <= c.confirm_rotation_rad
         };
         let confirmed: Vec<usize> =
             self.pending.iter().filter(|p| agrees(p)).map(|p| p.record).collect();
@@ -911,18 +911,18 @@ mod tests {
         let from = *truth.last().unwrap();
         for k in 1..=40 {
             let f = k as f64 / 40.0;
-            truth.push(Pose2::new(from.x + f * 18.5, from.y * (1.0 - f), 0.0));
+            truth.push(Pose2::new(from.x() + f * 18.5, from.y() * (1.0 - f), 0.0));
         }
         truth.extend(laps(20.0, 3));
         let mut source = Pose2::identity();
         let mut previous = truth[0];
         for (k, pose) in truth.iter().enumerate() {
             let step = previous.between(pose);
-            source = source.compose(&Pose2::new(step.x, step.y, step.heading + 0.001));
+            source = source.compose(&Pose2::new(step.x(), step.y(), step.heading() + 0.001));
             previous = *pose;
-            let walls = if pose.x < 5.0 {
+            let walls = if pose.x() < 5.0 {
                 &a
-            } else if pose.x > 15.0 {
+            } else if pose.x() > 15.0 {
                 &b
             } else {
                 &Vec::new()
@@ -930,7 +930,7 @@ mod tests {
             slam.step_at(k as f64 * 0.1, &source, &seen(walls, pose));
         }
         slam.optimize();
-        let in_room_a = |node: usize| slam.graph().nodes[node].x < 10.0;
+        let in_room_a = |node: usize| slam.graph().nodes[node].x() < 10.0;
         let false_loops = slam
             .graph()
             .edges
@@ -970,7 +970,7 @@ mod tests {
         assert_eq!(step.report.fallback, Some(Fallback::StampBackwards));
         assert_eq!(step.keyframe, None);
         assert_eq!(slam.keyframes().len(), 1);
-        assert!((step.pose.heading - 0.5).abs() < 1e-9, "{:?}", step.pose);
+        assert!((step.pose.heading() - 0.5).abs() < 1e-9, "{:?}", step.pose);
         // The next scan in order is processed and becomes a keyframe.
         let step = slam.step_at(2.0, &turned, &seen(&walls, &turned));
         assert_eq!(step.keyframe, Some(1));

@@ -100,8 +100,8 @@ impl MotionNoise {
     /// frame, `(x, y, heading)`. A non-finite increment gives a non-finite
     /// covariance (the caller falls back before using it).
     pub fn covariance(&self, increment: &Pose2) -> Matrix3<f64> {
-        let t = increment.x.hypot(increment.y);
-        let r = increment.heading.abs();
+        let t = increment.x().hypot(increment.y());
+        let r = increment.heading().abs();
         let var_t = (self.translation_per_m * t).powi(2)
             + (self.translation_per_rad * r).powi(2)
             + self.translation_floor_m.powi(2);
@@ -162,8 +162,8 @@ pub fn predict(
     noise: &MotionNoise,
 ) -> (Pose2, Matrix3<f64>) {
     let predicted = pose.compose(increment);
-    let (s, c) = pose.heading.sin_cos();
-    let (ux, uy) = (increment.x, increment.y);
+    let (s, c) = pose.heading().sin_cos();
+    let (ux, uy) = (increment.x(), increment.y());
     #[rustfmt::skip]
     let f = Matrix3::new(
         1.0, 0.0, -s * ux - c * uy,

@@ -205,13 +205,13 @@ pub fn iterated_update(
     let correction_dof = eig.iter().filter(|v| **v > largest * 1e-9).count().max(1);
     for _ in 0..iterations.max(1) {
         let offset = Vector3::new(
-            pose.x - prior_pose.x,
-            pose.y - prior_pose.y,
-            wrap_angle(pose.heading - prior_pose.heading),
+            pose.x() - prior_pose.x(),
+            pose.y() - prior_pose.y(),
+            wrap_angle(pose.heading() - prior_pose.heading()),
         );
         let weighted = measure(&pose).into_iter().map(|m| huber(m, huber_k));
         let (step, cov) = solve(&prior, &offset, weighted)?;
-        pose = Pose2::new(pose.x + step.x, pose.y + step.y, pose.heading + step.z);
+        pose = Pose2::new(pose.x() + step.x, pose.y() + step.y, pose.heading() + step.z);
         covariance = cov;
         if step.xy().norm() < 1e-6 && step.z.abs() < 1e-8 {
             break;
@@ -270,17 +270,21 @@ mod tests {
     #[test]
     fn the_update_weighs_the_prior() {
         // A wall 0.1 m further along x than the prior pose says.
-        let ms = |p: &Pose2| vec![wall(0.0, 0.0, 0.1 - p.x)];
+        let ms = |p: &Pose2| vec![wall(0.0, 0.0, 0.1 - p.x())];
         let tight = Matrix3::from_diagonal(&[1e-8, 1e-8, 1e-8].into());
         let loose = Matrix3::from_diagonal(&[1.0, 1.0, 1e-8].into());
         let fixed = iterated_update(&Pose2::identity(), &tight, 3, 1e9, ms).unwrap();
-        assert!(fixed.pose.x.abs() < 1e-3, "a confident source barely moves: {:?}", fixed.pose);
+        assert!(fixed.pose.x().abs() < 1e-3, "a confident source barely moves: {:?}", fixed.pose);
         assert!(fixed.correction_distance2 > 1.0);
         let pulled = iterated_update(&Pose2::identity(), &loose, 3, 1e9, ms).unwrap();
         assert!(pulled.correction_distance2 < 1.0, "{pulled:?}");
-        assert!((pulled.pose.x - 0.1).abs() < 1e-3, "an uncertain one follows: {:?}", pulled.pose);
+        assert!(
+            (pulled.pose.x() - 0.1).abs() < 1e-3,
+            "an uncertain one follows: {:?}",
+            pulled.pose
+        );
         // Along the wall nothing is measured: y stays.
-        assert!(pulled.pose.y.abs() < 1e-9);
+        assert!(pulled.pose.y().abs() < 1e-9);
     }
 
     #[test]

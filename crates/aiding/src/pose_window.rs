@@ -66,7 +66,7 @@ pub struct PoseWindow {
 }
 
 fn diff(a: &Pose2, b: &Pose2) -> Vector3<f64> {
-    Vector3::new(a.x - b.x, a.y - b.y, wrap_angle(a.heading - b.heading))
+    Vector3::new(a.x() - b.x(), a.y() - b.y(), wrap_angle(a.heading() - b.heading()))
 }
 
 fn huber_weight(m: &LineMeasurement, k: f64) -> Option<nalgebra::Matrix2<f64>> {
@@ -146,8 +146,8 @@ impl PoseWindow {
                 // Odometry: e = x_{k+1} - (x_k + R u); residual r = -e.
                 let predicted = prev.compose(&step.increment);
                 let r = diff(&predicted, &poses[k + 1]);
-                let (s, c) = prev.heading.sin_cos();
-                let (ux, uy) = (step.increment.x, step.increment.y);
+                let (s, c) = prev.heading().sin_cos();
+                let (ux, uy) = (step.increment.x(), step.increment.y());
                 #[rustfmt::skip]
                 let f = Matrix3::new(1.0, 0.0, -s * ux - c * uy, 0.0, 1.0, c * ux - s * uy, 0.0, 0.0, 1.0);
                 #[rustfmt::skip]
@@ -195,7 +195,11 @@ impl PoseWindow {
                 return None;
             }
             for (k, p) in poses.iter_mut().enumerate() {
-                *p = Pose2::new(p.x + dx[3 * k], p.y + dx[3 * k + 1], p.heading + dx[3 * k + 2]);
+                *p = Pose2::new(
+                    p.x() + dx[3 * k],
+                    p.y() + dx[3 * k + 1],
+                    p.heading() + dx[3 * k + 2],
+                );
             }
             cov = chol.inverse();
         }
@@ -237,7 +241,7 @@ mod tests {
         }
         // The anchor slid twice; the head is three steps past it.
         let h = w.head();
-        assert!((h.x - 5.0).abs() < 1e-9 && h.y.abs() < 1e-9, "{h:?}");
+        assert!((h.x() - 5.0).abs() < 1e-9 && h.y().abs() < 1e-9, "{h:?}");
     }
 
     #[test]
@@ -248,7 +252,7 @@ mod tests {
         w.push(
             step(|p: &Pose2| {
                 vec![LineMeasurement {
-                    residual: Vector2::new(0.0, 1.9 - p.x),
+                    residual: Vector2::new(0.0, 1.9 - p.x()),
                     jacobian: Matrix2x3::new(0.0, 0.0, 1.0, 1.0, 0.0, 0.0),
                     covariance: Matrix2::new(1e-6, 0.0, 0.0, 1e-6),
                 }]
@@ -256,6 +260,6 @@ mod tests {
             None,
         );
         w.solve(3, 1e9).unwrap();
-        assert!((w.head().x - 1.9).abs() < 1e-3, "{:?}", w.head());
+        assert!((w.head().x() - 1.9).abs() < 1e-3, "{:?}", w.head());
     }
 }

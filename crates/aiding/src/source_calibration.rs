@@ -98,14 +98,14 @@ impl SourceCalibration {
         if let (Some(_), Some(dt)) = (config.heading_rate_bias_std_rad_s, dt_s) {
             self.heading_rate_bias_var +=
                 config.heading_rate_bias_walk_rad_s_per_sqrt_s.powi(2) * dt;
-            inc = Pose2::new(inc.x, inc.y, inc.heading - self.heading_rate_bias_rad_s * dt);
+            inc = Pose2::new(inc.x(), inc.y(), inc.heading() - self.heading_rate_bias_rad_s * dt);
             var_heading = self.heading_rate_bias_var * dt * dt;
         }
-        let len = inc.x.hypot(inc.y);
+        let len = inc.x().hypot(inc.y());
         if config.speed_scale_std.is_some() {
             self.speed_scale_var += config.speed_scale_walk_per_sqrt_m.powi(2) * len;
             let k = 1.0 / (1.0 + self.speed_scale_error);
-            inc = Pose2::new(inc.x * k, inc.y * k, inc.heading);
+            inc = Pose2::new(inc.x() * k, inc.y() * k, inc.heading());
             var_along = self.speed_scale_var * len * len;
         }
         (inc, var_heading, var_along)
@@ -176,7 +176,7 @@ mod tests {
             // an exact measurement corrects it entirely.
             let prior = Matrix3::from_diagonal(&[1e-4, 1e-4, 1e-4].into());
             let post = Matrix3::from_diagonal(&[1e-4, 1e-4, 1e-6].into());
-            let correction = -(inc.heading - 0.0);
+            let correction = -(inc.heading() - 0.0);
             let step = Vector2::zeros();
             cal.observe(&config, Some(1.0), &step, (&Vector2::zeros(), correction), &prior, &post);
         }

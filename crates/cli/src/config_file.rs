@@ -336,15 +336,17 @@ fn merged_file(mut base: Value, overrides: &Value, label: &str) -> Result<Config
         .and_then(|()| file.loop_closure.validate())
         .and_then(|()| {
             let m = file.vehicle_from_sensor;
-            [("x", m.x), ("y", m.y), ("heading", m.heading)].into_iter().try_for_each(|(n, v)| {
-                ConfigError::check_field(
-                    v.is_finite(),
-                    "vehicle_from_sensor",
-                    n,
-                    v,
-                    "must be finite",
-                )
-            })
+            [("x", m.x()), ("y", m.y()), ("heading", m.heading())].into_iter().try_for_each(
+                |(n, v)| {
+                    ConfigError::check_field(
+                        v.is_finite(),
+                        "vehicle_from_sensor",
+                        n,
+                        v,
+                        "must be finite",
+                    )
+                },
+            )
         })
         .map_err(|e| BadInput(format!("{label}: {e}")))?;
     Ok(file)

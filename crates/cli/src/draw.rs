@@ -68,11 +68,11 @@ fn draw_map(
         }
     };
     for m in map.lines() {
-        grow([m.line.start.x, m.line.start.y]);
-        grow([m.line.end.x, m.line.end.y]);
+        grow([m.line.start().x, m.line.start().y]);
+        grow([m.line.end().x, m.line.end().y]);
     }
     for (_, s) in &series {
-        s.iter().flatten().for_each(|p| grow([p.x, p.y]));
+        s.iter().flatten().for_each(|p| grow([p.x(), p.y()]));
     }
     if !lo[0].is_finite() {
         return Err(BadInput("the map and trajectory are empty".into()).into());
@@ -80,11 +80,11 @@ fn draw_map(
     let mut plot = Plot::new(lo, hi, 1000.0);
     for m in map.lines() {
         let l = &m.line;
-        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
+        plot.line([l.start().x, l.start().y], [l.end().x, l.end().y], "#d62728", 2.0);
     }
     plot.legend(&format!("line map ({} lines)", map.len()), "#d62728", Mark::Line(2.0));
     for ((name, s), colour) in series.iter().zip(SERIES_COLOURS.iter().cycle()) {
-        let pts: Vec<[f64; 2]> = s.iter().flatten().map(|p| [p.x, p.y]).collect();
+        let pts: Vec<[f64; 2]> = s.iter().flatten().map(|p| [p.x(), p.y()]).collect();
         plot.polyline(&pts, colour, 1.5, false);
         plot.legend(name, colour, Mark::Line(1.5));
     }
@@ -102,8 +102,8 @@ fn draw_heading(trajectory: &std::path::Path, output: &std::path::Path) -> Resul
             let (mut acc, mut prev): (f64, Option<f64>) = (0.0, None);
             for (k, p) in s.iter().enumerate() {
                 let Some(p) = p else { continue };
-                acc += prev.map_or(p.heading, |q| pcaline::geometry::wrap_angle(p.heading - q));
-                prev = Some(p.heading);
+                acc += prev.map_or(p.heading(), |q| pcaline::geometry::wrap_angle(p.heading() - q));
+                prev = Some(p.heading());
                 out.push([k as f64, acc.to_degrees()]);
             }
             (name.clone(), out)
@@ -227,7 +227,7 @@ pub fn run(cmd: &DrawCommand, quiet: bool) -> Result<()> {
     plot.rings(&l2, "#d62728", 4.0);
     for l in d.lines {
         let s = &l.line;
-        plot.line([s.start.x, s.start.y], [s.end.x, s.end.y], "#d62728", 2.5);
+        plot.line([s.start().x, s.start().y], [s.end().x, s.end().y], "#d62728", 2.5);
     }
     // The sensor: a triangle along its x axis, not a dot that reads as a
     // point or a break-point.

@@ -237,8 +237,8 @@ impl StatsSums {
         }
         self.lines += d.lines.len();
         self.valid += d.points.len();
-        self.on_lines += d.lines.iter().map(|l| l.line.n_points).sum::<usize>();
-        self.residuals.extend(d.lines.iter().map(|l| l.line.residual_std));
+        self.on_lines += d.lines.iter().map(|l| l.line.n_points()).sum::<usize>();
+        self.residuals.extend(d.lines.iter().map(|l| l.line.residual_std()));
         self.noise.extend(d.noise.map(|n| n.near_sigma_m));
         self.steps.extend(d.noise_estimate.map(|e| e.range_step_m));
     }
@@ -702,8 +702,8 @@ pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport>
         if let LogRecord::Scan(s) = record {
             let detection = detector.detect(&s.scan);
             for l in detection.lines {
-                residuals.push(l.line.residual_std);
-                points.push(l.line.n_points);
+                residuals.push(l.line.residual_std());
+                points.push(l.line.n_points());
             }
             let plain: Vec<SensorLine> = detection.lines.iter().map(SensorLine::from).collect();
             let (skew_pose, _) = skewed.step_without_source(s.scan.stamp_s, &plain);

@@ -182,8 +182,8 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         poses.push(PoseOut {
             scan: poses.len(),
             stamp_s: s.scan.stamp_s,
-            source: source.map(|p| [p.x, p.y, p.heading]),
-            aided: [pose.x, pose.y, pose.heading],
+            source: source.map(|p| [p.x(), p.y(), p.heading()]),
+            aided: [pose.x(), pose.y(), pose.heading()],
             matches: step.report.matches,
         });
         bar.inc(1);
@@ -263,7 +263,7 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
     let l = mapper.loop_closing()?;
     for (out, p) in poses.iter_mut().zip(trajectory) {
         if let Some(p) = p {
-            out.aided = [p.x, p.y, p.heading];
+            out.aided = [p.x(), p.y(), p.heading()];
         }
     }
     let g = l.graph();
@@ -272,7 +272,11 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
             .nodes
             .iter()
             .zip(l.keyframes())
-            .map(|(n, k)| NodeOut { scan: k.scan, stamp_s: k.stamp_s, pose: [n.x, n.y, n.heading] })
+            .map(|(n, k)| NodeOut {
+                scan: k.scan,
+                stamp_s: k.stamp_s,
+                pose: [n.x(), n.y(), n.heading()],
+            })
             .collect(),
         edges: g
             .edges
@@ -285,7 +289,7 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
                     _ => "sequential",
                 },
                 active: e.active,
-                from_from_to: [e.from_from_to.x, e.from_from_to.y, e.from_from_to.heading],
+                from_from_to: [e.from_from_to.x(), e.from_from_to.y(), e.from_from_to.heading()],
                 covariance: std::array::from_fn(|r| std::array::from_fn(|c| e.covariance[(r, c)])),
             })
             .collect(),
@@ -308,9 +312,9 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
                     _ => "other",
                 },
                 candidate_from_current: [
-                    r.candidate_from_current.x,
-                    r.candidate_from_current.y,
-                    r.candidate_from_current.heading,
+                    r.candidate_from_current.x(),
+                    r.candidate_from_current.y(),
+                    r.candidate_from_current.heading(),
                 ],
                 matched_length_m: r.matched_length_m,
                 weakest_direction_m: r.weakest_direction_m,
@@ -387,8 +391,8 @@ fn draw(
         }
     };
     for m in map.lines() {
-        grow([m.line.start.x, m.line.start.y]);
-        grow([m.line.end.x, m.line.end.y]);
+        grow([m.line.start().x, m.line.start().y]);
+        grow([m.line.end().x, m.line.end().y]);
     }
     for p in poses {
         grow([p.aided[0], p.aided[1]]);
@@ -399,7 +403,7 @@ fn draw(
     let mut plot = Plot::new(lo, hi, 1000.0);
     for m in map.lines() {
         let l = &m.line;
-        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 1.5);
+        plot.line([l.start().x, l.start().y], [l.end().x, l.end().y], "#d62728", 1.5);
     }
     let source: Vec<[f64; 2]> =
         poses.iter().filter_map(|p| p.source.map(|s| [s[0], s[1]])).collect();

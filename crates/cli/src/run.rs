@@ -139,7 +139,7 @@ const TRUTH_COLOUR: &str = "#a6dba0";
 const TRUTH_WIDTH: f64 = 6.0;
 
 fn pose_array(p: &Pose2) -> [f64; 3] {
-    [p.x, p.y, p.heading]
+    [p.x(), p.y(), p.heading()]
 }
 
 fn load(scene: &Option<PathBuf>) -> Result<(Scene, String)> {
@@ -209,7 +209,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
             let sensor_lines: Vec<SensorLine> =
                 detection.lines.iter().map(SensorLine::from).collect();
             line_count += sensor_lines.len();
-            residuals.extend(sensor_lines.iter().map(|l| l.line.residual_std));
+            residuals.extend(sensor_lines.iter().map(|l| l.line.residual_std()));
             if frame.index % 20 == 0 {
                 drawn.extend(sensor_lines.iter().map(|l| l.line.transformed(&frame.true_pose)));
             }
@@ -318,9 +318,9 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
 fn draw_detections(scene: &Scene, sim: &Simulator, drawn: &[LineSegment]) -> String {
     let mut plot = draw_scene(scene, None);
     for l in drawn {
-        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
+        plot.line([l.start().x, l.start().y], [l.end().x, l.end().y], "#d62728", 2.0);
     }
-    let truth: Vec<[f64; 2]> = sim.true_poses().iter().map(|p| [p.x, p.y]).collect();
+    let truth: Vec<[f64; 2]> = sim.true_poses().iter().map(|p| [p.x(), p.y()]).collect();
     plot.polyline(&truth, "#2ca02c", 1.0, false);
     plot.legend("detected lines, every 20th scan", "#d62728", Mark::Line(2.0));
     plot.legend("true trajectory", "#2ca02c", Mark::Line(1.0));
@@ -336,9 +336,9 @@ fn draw_map(scene: &Scene, sim: &Simulator, full: &Aiding, est: &[Vec<Pose2>]) -
     }
     for m in full.map().lines() {
         let l = &m.line;
-        plot.line([l.start.x, l.start.y], [l.end.x, l.end.y], "#d62728", 2.0);
+        plot.line([l.start().x, l.start().y], [l.end().x, l.end().y], "#d62728", 2.0);
     }
-    let path = |poses: &[Pose2]| poses.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
+    let path = |poses: &[Pose2]| poses.iter().map(|p| [p.x(), p.y()]).collect::<Vec<_>>();
     // The truth thick and light underneath, so the aided line drawn thin on
     // top of it stays visible where the two agree.
     plot.polyline(&path(sim.true_poses()), TRUTH_COLOUR, TRUTH_WIDTH, false);
@@ -363,8 +363,8 @@ fn draw_heading(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
         let mut acc = 0.0;
         let mut prev: Option<f64> = None;
         for (k, p) in poses.iter().enumerate() {
-            acc += prev.map_or(p.heading, |q| pcaline::geometry::wrap_angle(p.heading - q));
-            prev = Some(p.heading);
+            acc += prev.map_or(p.heading(), |q| pcaline::geometry::wrap_angle(p.heading() - q));
+            prev = Some(p.heading());
             out.push([k as f64 * dt, acc.to_degrees()]);
         }
         out
@@ -401,7 +401,10 @@ fn draw_heading_error(sim: &Simulator, est: &[Vec<Pose2>]) -> String {
             .zip(truth)
             .enumerate()
             .map(|(k, (p, t))| {
-                [k as f64 * dt, pcaline::geometry::wrap_angle(p.heading - t.heading).to_degrees()]
+                [
+                    k as f64 * dt,
+                    pcaline::geometry::wrap_angle(p.heading() - t.heading()).to_degrees(),
+                ]
             })
             .collect()
     };

@@ -208,7 +208,7 @@ fn map_with_a_sensor_mount_writes_the_vehicles_trajectory() {
     for (s, v) in a.iter().zip(&b) {
         let expected = pcaline::Pose2::new(s[0], s[1], s[2]).compose(&sensor_from_vehicle);
         assert!(
-            (expected.x - v[0]).abs() < 1e-9 && (expected.y - v[1]).abs() < 1e-9,
+            (expected.x() - v[0]).abs() < 1e-9 && (expected.y() - v[1]).abs() < 1e-9,
             "{s:?} {v:?}"
         );
     }

@@ -73,18 +73,18 @@ pub fn true_walls(frame: &SimFrame, world: &World, criteria: &DetectionCriteria)
 
 /// Whether `detected` matches `truth` under `criteria`, and the overlap.
 pub fn matches(truth: &LineSegment, detected: &LineSegment, criteria: &DetectionCriteria) -> bool {
-    if line_angle_diff(truth.alpha, detected.alpha).abs() > criteria.max_angle_rad {
+    if line_angle_diff(truth.alpha(), detected.alpha()).abs() > criteria.max_angle_rad {
         return false;
     }
-    if truth.signed_distance(&detected.start).abs() > criteria.max_endpoint_m
-        || truth.signed_distance(&detected.end).abs() > criteria.max_endpoint_m
+    if truth.signed_distance(&detected.start()).abs() > criteria.max_endpoint_m
+        || truth.signed_distance(&detected.end()).abs() > criteria.max_endpoint_m
     {
         return false;
     }
-    let s = |p: &Point2<f64>| (p - truth.start).dot(&truth.direction);
+    let s = |p: &Point2<f64>| (p - truth.start()).dot(&truth.direction());
     let (t0, t1) = (0.0f64, truth.length());
     let (d0, d1) = {
-        let (a, b) = (s(&detected.start), s(&detected.end));
+        let (a, b) = (s(&detected.start()), s(&detected.end()));
         (a.min(b), a.max(b))
     };
     let overlap = (t1.min(d1) - t0.max(d0)).max(0.0);
@@ -142,7 +142,7 @@ impl DetectionScore {
             let best =
                 truth.iter().enumerate().filter(|(_, t)| matches(&t.line, d, criteria)).min_by(
                     |a, b| {
-                        let e = |t: &TrueWall| t.line.signed_distance(&d.centroid).abs();
+                        let e = |t: &TrueWall| t.line.signed_distance(&d.centroid()).abs();
                         e(a.1).total_cmp(&e(b.1))
                     },
                 );
@@ -150,15 +150,15 @@ impl DetectionScore {
                 Some((k, t)) => {
                     matched[k] = true;
                     self.matching_detections += 1;
-                    self.alpha_errors.push(line_angle_diff(d.alpha, t.line.alpha));
-                    self.d_errors.push(t.line.signed_distance(&d.centroid));
-                    let (a, b) = (t.line.start, t.line.end);
-                    let straight = (d.start - a).norm() + (d.end - b).norm();
-                    let crossed = (d.start - b).norm() + (d.end - a).norm();
+                    self.alpha_errors.push(line_angle_diff(d.alpha(), t.line.alpha()));
+                    self.d_errors.push(t.line.signed_distance(&d.centroid()));
+                    let (a, b) = (t.line.start(), t.line.end());
+                    let straight = (d.start() - a).norm() + (d.end() - b).norm();
+                    let crossed = (d.start() - b).norm() + (d.end() - a).norm();
                     let (e0, e1) = if straight <= crossed {
-                        ((d.start - a).norm(), (d.end - b).norm())
+                        ((d.start() - a).norm(), (d.end() - b).norm())
                     } else {
-                        ((d.start - b).norm(), (d.end - a).norm())
+                        ((d.start() - b).norm(), (d.end() - a).norm())
                     };
                     self.endpoint_errors.extend([e0, e1]);
                 }

@@ -186,7 +186,7 @@ pub fn surface_rms_m(line: &LineSegment, world: &World) -> f64 {
     let mut sum = 0.0;
     for k in 0..SAMPLES {
         let t = k as f64 / (SAMPLES - 1) as f64;
-        let p = line.start + (line.end - line.start) * t;
+        let p = line.start() + (line.end() - line.start()) * t;
         let nearest = world
             .walls()
             .iter()

@@ -61,16 +61,16 @@ pub fn fit_accuracy(n: usize, length_m: f64, sigma_m: f64, runs: usize, seed: u6
         }
         let Some(line) = fit_pca(&pts) else { continue };
         let truth = pcaline_geometry::LineSegment::through(centre, dir, centre - dir, centre + dir);
-        let da = line_angle_diff(line.alpha, truth.alpha);
-        let offset = truth.signed_distance(&line.centroid);
+        let da = line_angle_diff(line.alpha(), truth.alpha());
+        let offset = truth.signed_distance(&line.centroid());
         // d of the fit against the true line's d in the truth's normal
         // convention: for a line near the origin the fit's normal may point
         // the other way (alpha + pi, d -> -d), which also flips the sign of
         // the covariance's cross term.
-        let same_normal = (line.alpha - truth.alpha).cos() >= 0.0;
-        let dd = if same_normal { line.d - truth.d } else { -line.d - truth.d };
+        let same_normal = (line.alpha() - truth.alpha()).cos() >= 0.0;
+        let dd = if same_normal { line.d() - truth.d() } else { -line.d() - truth.d() };
         let e = Vector2::new(da, dd);
-        let mut p: Matrix2<f64> = line.covariance;
+        let mut p: Matrix2<f64> = line.covariance();
         if !same_normal {
             p[(0, 1)] = -p[(0, 1)];
             p[(1, 0)] = -p[(1, 0)];
@@ -157,14 +157,14 @@ pub fn range_bearing_accuracy(
         let (Some(pca), Some(w)) = (fit_pca(&pts), fit_weighted(&pts, &covs, 3)) else { continue };
         let Some(cov_pca) = pca_covariance(&pca, &pts, &covs) else { continue };
         let (Some(a), Some(b)) =
-            (nees(pca.alpha, pca.d, &cov_pca), nees(w.alpha, w.d, &w.covariance))
+            (nees(pca.alpha(), pca.d(), &cov_pca), nees(w.alpha(), w.d(), &w.covariance()))
         else {
             continue;
         };
         nees_pca += a;
         nees_w += b;
-        sq_pca += line_angle_diff(pca.alpha, phi).powi(2);
-        sq_w += line_angle_diff(w.alpha, phi).powi(2);
+        sq_pca += line_angle_diff(pca.alpha(), phi).powi(2);
+        sq_w += line_angle_diff(w.alpha(), phi).powi(2);
         used += 1;
     }
     // The bound: the weighted information at the true points.
@@ -172,7 +172,7 @@ pub fn range_bearing_accuracy(
     let exact_covs: Vec<_> =
         truth.iter().map(|&(r, b)| point_covariance(r, b, sigma_r(r), sigma_bearing_rad)).collect();
     let crb =
-        fit_weighted(&exact, &exact_covs, 1).map_or(f64::NAN, |l| l.covariance[(0, 0)].sqrt());
+        fit_weighted(&exact, &exact_covs, 1).map_or(f64::NAN, |l| l.covariance()[(0, 0)].sqrt());
     let m = used.max(1) as f64;
     RangeBearingAccuracy {
         n: truth.len(),

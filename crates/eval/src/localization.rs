@@ -5,7 +5,7 @@
 
 use crate::{MapQuality, TrajectoryErrors, VisibleWalls, map_quality, trajectory_errors};
 use pcaline_aiding::{AidingConfig, Localizer, LoopClosing, LoopClosureConfig, SensorLine};
-use pcaline_geometry::{ConfigError, Pose2};
+use pcaline_geometry::{ConfigError, Pose2, Twist2};
 use pcaline_mapping::MapConfig;
 use pcaline_sim::{SimFrame, Simulator};
 
@@ -87,7 +87,7 @@ impl AidedRun {
         sim: &Simulator,
         map: MapConfig,
         modes: &[AidingConfig],
-        lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
+        lines_of: impl FnMut(&SimFrame, Option<Twist2>) -> Vec<SensorLine>,
     ) -> Result<Self, ConfigError> {
         Self::run_with_loop_closure(sim, map, modes, None, lines_of)
     }
@@ -101,7 +101,7 @@ impl AidedRun {
         map: MapConfig,
         modes: &[AidingConfig],
         loop_closure: Option<(AidingConfig, LoopClosureConfig)>,
-        lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
+        lines_of: impl FnMut(&SimFrame, Option<Twist2>) -> Vec<SensorLine>,
     ) -> Result<Self, ConfigError> {
         let observe = |_: RunStep<'_>| Ok::<(), std::convert::Infallible>(());
         Self::run_observed(sim, map, modes, loop_closure, lines_of, observe).map_err(|e| match e {
@@ -119,7 +119,7 @@ impl AidedRun {
         map: MapConfig,
         modes: &[AidingConfig],
         loop_closure: Option<(AidingConfig, LoopClosureConfig)>,
-        mut lines_of: impl FnMut(&SimFrame, Option<Pose2>) -> Vec<SensorLine>,
+        mut lines_of: impl FnMut(&SimFrame, Option<Twist2>) -> Vec<SensorLine>,
         mut observe: impl FnMut(RunStep<'_>) -> Result<(), E>,
     ) -> Result<Self, ObservedRunError<E>> {
         let mut loops = modes

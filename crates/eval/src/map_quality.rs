@@ -108,7 +108,7 @@ pub fn map_quality(
     let mut spurious = 0;
     let on_wall = |l: &LineSegment, w: &Wall| {
         let dir = (w.b - w.a).normalize();
-        let angle = l.direction.dot(&dir).abs().min(1.0).acos();
+        let angle = l.direction().dot(&dir).abs().min(1.0).acos();
         (rms_to_line(l, w), angle)
     };
     for m in map {
@@ -147,7 +147,7 @@ pub fn map_quality(
                 continue;
             }
             let dir = (w.b - w.a).normalize();
-            let (s0, s1) = ((l.start - w.a).dot(&dir), (l.end - w.a).dot(&dir));
+            let (s0, s1) = ((l.start() - w.a).dot(&dir), (l.end() - w.a).dot(&dir));
             let (lo, hi) = (s0.min(s1), s0.max(s1));
             for (k, c) in cov.iter_mut().enumerate() {
                 let mid = (k as f64 + 0.5) * visible.bin_m;
@@ -177,7 +177,7 @@ fn overlap_m(l: &LineSegment, w: &Wall) -> f64 {
     let ab = w.b - w.a;
     let len = ab.norm();
     let dir = ab / len;
-    let (s0, s1) = ((l.start - w.a).dot(&dir), (l.end - w.a).dot(&dir));
+    let (s0, s1) = ((l.start() - w.a).dot(&dir), (l.end() - w.a).dot(&dir));
     (s0.max(s1).min(len) - s0.min(s1).max(0.0)).max(0.0)
 }
 
@@ -188,13 +188,13 @@ fn rms_to_line(l: &LineSegment, w: &Wall) -> f64 {
         let v = p - w.a;
         (v.x * dir.y - v.y * dir.x).abs()
     };
-    ((d(&l.start).powi(2) + d(&l.end).powi(2)) / 2.0).sqrt()
+    ((d(&l.start()).powi(2) + d(&l.end()).powi(2)) / 2.0).sqrt()
 }
 
 /// Rms distance of the segment's two endpoints from the wall segment.
 fn rms_to_segment(l: &LineSegment, w: &Wall) -> f64 {
     let d = |p: &Point2<f64>| point_segment_distance(p, &w.a, &w.b);
-    ((d(&l.start).powi(2) + d(&l.end).powi(2)) / 2.0).sqrt()
+    ((d(&l.start()).powi(2) + d(&l.end()).powi(2)) / 2.0).sqrt()
 }
 
 fn point_segment_distance(p: &Point2<f64>, a: &Point2<f64>, b: &Point2<f64>) -> f64 {

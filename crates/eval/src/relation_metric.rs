@@ -49,7 +49,7 @@ impl StampedTrajectory {
 
 /// The relation errors of a trajectory: for every relation whose two times
 /// both meet a pose, the error `e = relative⁻¹ ∘ (pose(t1)⁻¹ ∘ pose(t2))`,
-/// its translational part `|(e.x, e.y)|` and its rotational part `|e.heading|`.
+/// its translational part `|(e.x(), e.y())|` and its rotational part `|e.heading()|`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub struct RelationErrors {
@@ -103,8 +103,8 @@ pub fn relation_errors(
             continue;
         };
         let e = r.relative.between(&a.between(&b));
-        translation.push(if e.is_finite() { e.x.hypot(e.y) } else { f64::INFINITY });
-        rotation.push(if e.is_finite() { wrap_angle(e.heading).abs() } else { f64::INFINITY });
+        translation.push(if e.is_finite() { e.x().hypot(e.y()) } else { f64::INFINITY });
+        rotation.push(if e.is_finite() { wrap_angle(e.heading()).abs() } else { f64::INFINITY });
     }
     if translation.is_empty() {
         return None;
@@ -181,8 +181,8 @@ mod tests {
             (f64::NAN, Pose2::new(9.0, 0.0, 0.0)),
         ]);
         assert_eq!(path.len(), 2);
-        assert_eq!(path.nearest(0.6, 0.5).unwrap().x, 1.0);
-        assert_eq!(path.nearest(0.4, 0.5).unwrap().x, 0.0);
+        assert_eq!(path.nearest(0.6, 0.5).unwrap().x(), 1.0);
+        assert_eq!(path.nearest(0.4, 0.5).unwrap().x(), 0.0);
         assert!(path.nearest(0.5, 0.4).is_none());
         assert!(path.nearest(-1.0, 0.5).is_none());
         assert!(StampedTrajectory::default().nearest(0.0, 1.0).is_none());

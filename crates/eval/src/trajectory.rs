@@ -26,8 +26,8 @@ pub fn trajectory_errors(estimate: &[Pose2], truth: &[Pose2]) -> Option<Trajecto
     let (mut h2, mut hmax, mut p2, mut last) = (0.0, 0.0f64, 0.0, 0.0);
     for (e, t) in estimate.iter().zip(truth).take(n) {
         let dh =
-            if e.is_finite() { wrap_angle(e.heading - t.heading).abs() } else { f64::INFINITY };
-        let dp = if e.is_finite() { (e.x - t.x).hypot(e.y - t.y) } else { f64::INFINITY };
+            if e.is_finite() { wrap_angle(e.heading() - t.heading()).abs() } else { f64::INFINITY };
+        let dp = if e.is_finite() { (e.x() - t.x()).hypot(e.y() - t.y()) } else { f64::INFINITY };
         h2 += dh * dh;
         hmax = hmax.max(dh);
         p2 += dp * dp;
@@ -70,21 +70,21 @@ pub fn rigidly_aligned_trajectory_errors(
     let n = pairs.len() as f64;
     let (mut ex, mut ey, mut rx, mut ry) = (0.0, 0.0, 0.0, 0.0);
     for (e, r) in &pairs {
-        ex += e.x / n;
-        ey += e.y / n;
-        rx += r.x / n;
-        ry += r.y / n;
+        ex += e.x() / n;
+        ey += e.y() / n;
+        rx += r.x() / n;
+        ry += r.y() / n;
     }
     let (mut cross, mut dot) = (0.0, 0.0);
     for (e, r) in &pairs {
-        let (px, py, qx, qy) = (e.x - ex, e.y - ey, r.x - rx, r.y - ry);
+        let (px, py, qx, qy) = (e.x() - ex, e.y() - ey, r.x() - rx, r.y() - ry);
         cross += px * qy - py * qx;
         dot += px * qx + py * qy;
     }
     let theta = if cross == 0.0 && dot == 0.0 {
         // All positions coincide: align the mean heading instead.
         let (s, c) = pairs.iter().fold((0.0, 0.0), |(s, c), (e, r)| {
-            let d = wrap_angle(r.heading - e.heading);
+            let d = wrap_angle(r.heading() - e.heading());
             (s + d.sin(), c + d.cos())
         });
         s.atan2(c)

@@ -82,7 +82,7 @@ pub struct LineFits {
 /// let mut fits = LineFits::default();
 /// fit_lines(&points, &[0..101], &mut [0..101], false, &FitConfig::default(), None, &mut fits);
 /// assert_eq!(fits.lines.len(), 1);
-/// assert!((fits.lines[0].line.d - 2.0).abs() < 1e-6);
+/// assert!((fits.lines[0].line.d() - 2.0).abs() < 1e-6);
 /// ```
 pub fn fit_lines(
     points: &ScanPoints,
@@ -137,7 +137,7 @@ pub fn fit_lines(
         // One eigen decomposition serves the fit and the orientation test.
         let eigen = piece.moments.eigen();
         let Some(line) = line_from_eigen(&piece.moments, &eigen, &first, &last) else { continue };
-        if line.n_points < config.min_line_points
+        if line.n_points() < config.min_line_points
             || line.length() < config.min_line_length_m
             || config.orientation_test.is_some_and(|t| !t.accepts(&piece.moments, &eigen))
         {
@@ -151,7 +151,7 @@ pub fn fit_lines(
             let wrapped = xy[piece.first..].iter().chain(&xy[..=piece.last]);
             straightness(wrapped, &line, &reference_noise)
         };
-        let sigma = reference_noise.sigma_at(line.centroid.coords.norm());
+        let sigma = reference_noise.sigma_at(line.centroid().coords.norm());
         if config.straightness_test.is_some_and(|t| !t.accepts(&straightness, sigma)) {
             continue;
         }

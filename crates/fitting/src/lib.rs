@@ -18,7 +18,7 @@
 //! let config = FitConfig::paper();
 //! assert!(elongation_ratio(&m.eigen()) > config.eth); // a perfect line: r = inf
 //! let line = line_from_moments(&m, &pts[0], &pts[19]).unwrap();
-//! assert!((line.d - 1.0).abs() < 1e-12);
+//! assert!((line.d() - 1.0).abs() < 1e-12);
 //! ```
 
 mod corners;

@@ -107,7 +107,7 @@ impl Moments {
     /// The moments in another frame: `parent_from_self` rotates and translates
     /// the points (the scatter rotates, the centroid moves).
     pub fn transformed(&self, parent_from_self: &pcaline_geometry::Pose2) -> Moments {
-        let (s, c) = parent_from_self.heading.sin_cos();
+        let (s, c) = parent_from_self.heading().sin_cos();
         let (a, b, d) = (self.sxx, self.sxy, self.syy);
         // R S R^T for R = [[c, -s], [s, c]].
         let sxx = c * c * a - 2.0 * c * s * b + s * s * d;

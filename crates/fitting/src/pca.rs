@@ -16,7 +16,7 @@ use pcaline_geometry::{LineSegment, Matrix2, Point2, SlopeIntercept, Vector2};
 /// use pcaline_geometry::Point2;
 /// let pts: Vec<_> = (0..10).map(|i| Point2::new(3.0, i as f64 * 0.1)).collect();
 /// let line = fit_pca(&pts).unwrap();   // a vertical wall at x = 3
-/// assert!(line.alpha.abs() < 1e-12 && (line.d - 3.0).abs() < 1e-12);
+/// assert!(line.alpha().abs() < 1e-12 && (line.d() - 3.0).abs() < 1e-12);
 /// assert!((line.length() - 0.9).abs() < 1e-12);
 /// ```
 pub fn fit_pca(points: &[Point2<f64>]) -> Option<LineSegment> {
@@ -93,17 +93,15 @@ pub fn line_from_eigen(
     if moments.n < 2 || !finite || eigen.lambda_max <= 0.0 {
         return None;
     }
-    let mut line = LineSegment::through(moments.mean, eigen.major, *first, *last);
+    let line = LineSegment::through(moments.mean, eigen.major, *first, *last);
     let n = moments.n as f64;
     let s2 = if moments.n > 2 { eigen.lambda_min * n / (n - 2.0) } else { 0.0 };
     let var_alpha = s2 / (n * eigen.lambda_max);
-    let tangent = Vector2::new(-line.alpha.sin(), line.alpha.cos());
-    let t = tangent.dot(&line.centroid.coords);
-    line.n_points = moments.n;
-    line.residual_std = s2.sqrt();
-    line.covariance =
+    let tangent = Vector2::new(-line.alpha().sin(), line.alpha().cos());
+    let t = tangent.dot(&line.centroid().coords);
+    let covariance =
         Matrix2::new(var_alpha, t * var_alpha, t * var_alpha, s2 / n + t * t * var_alpha);
-    Some(line)
+    Some(line.with_statistics(moments.n, s2.sqrt(), covariance))
 }
 
 #[cfg(test)]
@@ -118,10 +116,10 @@ mod tests {
     fn horizontal_wall() {
         let pts: Vec<_> = (0..20).map(|i| Point2::new(i as f64 * 0.1 - 1.0, -2.0)).collect();
         let l = fit_pca(&pts).unwrap();
-        assert!((l.alpha + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
-        assert!((l.d - 2.0).abs() < 1e-12);
-        assert_eq!(l.residual_std, 0.0);
-        assert_eq!(l.n_points, 20);
+        assert!((l.alpha() + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert!((l.d() - 2.0).abs() < 1e-12);
+        assert_eq!(l.residual_std(), 0.0);
+        assert_eq!(l.n_points(), 20);
     }
 
     #[test]
@@ -129,8 +127,8 @@ mod tests {
         // Points along the x axis itself: the line passes through the origin.
         let pts: Vec<_> = (1..30).map(|i| Point2::new(i as f64 * 0.1, 0.0)).collect();
         let l = fit_pca(&pts).unwrap();
-        assert_eq!(l.d, 0.0);
-        assert!((l.alpha.abs() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert_eq!(l.d(), 0.0);
+        assert!((l.alpha().abs() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
     }
 
     #[test]
@@ -176,11 +174,11 @@ mod tests {
                 .map(|i| Point2::new(3.0 + noise.sample(&mut rng), -1.0 + 0.02 * i as f64 + 0.5))
                 .collect();
             let l = fit_pca(&pts).unwrap();
-            let a = line_angle_diff(l.alpha, 0.0);
+            let a = line_angle_diff(l.alpha(), 0.0);
             sa += a * a;
-            sd += (l.d - 3.0).powi(2);
-            pred_a += l.covariance[(0, 0)];
-            pred_d += l.covariance[(1, 1)];
+            sd += (l.d() - 3.0).powi(2);
+            pred_a += l.covariance()[(0, 0)];
+            pred_d += l.covariance()[(1, 1)];
         }
         let ratio_a = sa / pred_a;
         let ratio_d = sd / pred_d;
@@ -207,7 +205,7 @@ mod tests {
             for p in &pts {
                 prop_assert!(l.signed_distance(p).abs() < 1e-9);
             }
-            prop_assert!(l.residual_std < 1e-6);
+            prop_assert!(l.residual_std() < 1e-6);
         }
 
         #[test]
@@ -223,10 +221,10 @@ mod tests {
             let moved: Vec<_> = pts.iter().map(|p| pose.transform_point(p)).collect();
             let a = fit_pca(&pts).unwrap().transformed(&pose);
             let b = fit_pca(&moved).unwrap();
-            prop_assert!(line_angle_diff(a.alpha, b.alpha).abs() < 1e-9);
-            prop_assert!((a.d - b.d).abs() < 1e-8);
-            prop_assert!((a.start - b.start).norm() < 1e-8 && (a.end - b.end).norm() < 1e-8);
-            prop_assert!((a.residual_std - b.residual_std).abs() < 1e-9);
+            prop_assert!(line_angle_diff(a.alpha(), b.alpha()).abs() < 1e-9);
+            prop_assert!((a.d() - b.d()).abs() < 1e-8);
+            prop_assert!((a.start() - b.start()).norm() < 1e-8 && (a.end() - b.end()).norm() < 1e-8);
+            prop_assert!((a.residual_std() - b.residual_std()).abs() < 1e-9);
         }
     }
 }

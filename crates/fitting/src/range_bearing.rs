@@ -126,17 +126,15 @@ pub fn fit_weighted(
         line = LineSegment::through(Point2::from(mean), eigen.major, first, last);
     }
     let (information, _) = sums(&line, points, covariances, |v| (1.0 / v, 0.0));
-    line.covariance = information.try_inverse()?;
-    line.n_points = points.len();
+    let covariance = information.try_inverse()?;
     let n = line.normal();
     let (mut r2, mut wsum) = (0.0, 0.0);
     for (p, c) in points.iter().zip(covariances) {
         let w = 1.0 / var_across(&n, c);
-        r2 += w * (n.dot(&p.coords) - line.d).powi(2);
+        r2 += w * (n.dot(&p.coords) - line.d()).powi(2);
         wsum += w;
     }
-    line.residual_std = (r2 / wsum).sqrt();
-    Some(line)
+    Some(line.with_statistics(points.len(), (r2 / wsum).sqrt(), covariance))
 }
 
 #[cfg(test)]
@@ -171,7 +169,7 @@ mod tests {
         let expected = a.try_inverse().unwrap() * 1e-4;
         assert!((c - expected).norm() < 1e-12 * expected.norm().max(1.0), "{c} vs {expected}");
         let w = fit_weighted(&pts, &cov, 3).unwrap();
-        assert!((w.covariance - expected).norm() < 1e-12 + 1e-9 * expected.norm());
+        assert!((w.covariance() - expected).norm() < 1e-12 + 1e-9 * expected.norm());
         assert!(fit_weighted(&pts[..1], &cov[..1], 3).is_none());
         assert!(pca_covariance(&line, &pts, &cov[1..]).is_none());
     }
@@ -203,13 +201,13 @@ mod tests {
             let pca = fit_pca(&pts).unwrap();
             let weighted = fit_weighted(&pts, &covs, 3).unwrap();
             let nees = |l: &LineSegment, c: &Matrix2<f64>| {
-                let e = Vector2::new(line_angle_diff(l.alpha, phi), l.d - d);
+                let e = Vector2::new(line_angle_diff(l.alpha(), phi), l.d() - d);
                 (e.transpose() * c.try_inverse().unwrap() * e)[(0, 0)]
             };
             nees_pca += nees(&pca, &pca_covariance(&pca, &pts, &covs).unwrap());
-            nees_w += nees(&weighted, &weighted.covariance);
-            sq_pca += line_angle_diff(pca.alpha, phi).powi(2);
-            sq_w += line_angle_diff(weighted.alpha, phi).powi(2);
+            nees_w += nees(&weighted, &weighted.covariance());
+            sq_pca += line_angle_diff(pca.alpha(), phi).powi(2);
+            sq_w += line_angle_diff(weighted.alpha(), phi).powi(2);
         }
         let (nees_pca, nees_w) = (nees_pca / runs as f64, nees_w / runs as f64);
         assert!((nees_pca / 2.0 - 1.0).abs() < 0.1, "PCA NEES {nees_pca}");

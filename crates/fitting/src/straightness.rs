@@ -61,7 +61,7 @@ pub fn straightness<'a>(
 ) -> Straightness {
     let normal = line.normal();
     let tangent = pcaline_geometry::Vector2::new(-normal.y, normal.x);
-    let centre = line.centroid.coords.dot(&tangent);
+    let centre = line.centroid().coords.dot(&tangent);
     let inv_half = 2.0 / line.length().max(1e-9);
     // Signs as 0 or 1 (2: none yet), counted without branches: on white
     // residuals a sign change is a coin flip no predictor guesses.
@@ -71,7 +71,7 @@ pub fn straightness<'a>(
     let (mut su, mut sr) = ([0.0f64; 5], [0.0f64; 3]);
     let mut n = 0usize;
     for p in points {
-        let r = p.coords.dot(&normal) - line.d;
+        let r = p.coords.dot(&normal) - line.d();
         let u = (p.coords.dot(&tangent) - centre) * inv_half;
         let u2 = u * u;
         su[1] += u;
@@ -90,8 +90,8 @@ pub fn straightness<'a>(
     su[0] = n as f64;
     let signed = n;
     let negative = signed - positive;
-    let sigma = noise.sigma_at(line.centroid.coords.norm());
-    let residual_ratio = if line.residual_std == 0.0 { 0.0 } else { line.residual_std / sigma };
+    let sigma = noise.sigma_at(line.centroid().coords.norm());
+    let residual_ratio = if line.residual_std() == 0.0 { 0.0 } else { line.residual_std() / sigma };
     // The parabola's value at the ends minus at the middle is c; the surface
     // under the middle lies -c from the chord.
     let bow_m = if n >= 5 {

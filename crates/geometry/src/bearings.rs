@@ -1,7 +1,7 @@
 //! Polar to Cartesian conversion (paper eq. 1) with a cached cos/sin table.
 
-use crate::{Pose2, Scan};
-use nalgebra::{Point2, Vector2};
+use crate::{Scan, Twist2};
+use nalgebra::Point2;
 
 /// Converts one return to a point in the sensor frame: `x = r cos(theta)`,
 /// `y = r sin(theta)` (paper eq. 1).
@@ -111,26 +111,18 @@ impl ScanPoints {
     /// velocity `velocity` (metres and radians per second, in its own frame)
     /// and beams `beam_period_s` seconds apart. Point `k` of beam `i` was
     /// taken `i * beam_period_s` after the first beam, from the pose
-    /// `exp(velocity * t)` (the exact constant-twist motion).
+    /// `exp(velocity * t)` (the exact constant-twist motion,
+    /// [`Twist2::motion_over`]).
     ///
     /// Ranges and bearings are left as measured. A non-finite velocity or
     /// period leaves the points as they are.
-    pub fn deskew(&mut self, velocity: &Pose2, beam_period_s: f64) {
+    pub fn deskew(&mut self, velocity: &Twist2, beam_period_s: f64) {
         if !(velocity.is_finite() && beam_period_s.is_finite() && beam_period_s > 0.0) {
             return;
         }
-        let (v, w) = (Vector2::new(velocity.x, velocity.y), velocity.heading);
         for (p, &beam) in self.xy.iter_mut().zip(&self.beam) {
-            let t = f64::from(beam) * beam_period_s;
-            let theta = w * t;
-            // exp of the twist: translation V(theta) v t.
-            let (s, c) = theta.sin_cos();
-            let (a, b) =
-                if theta.abs() < 1e-9 { (1.0, 0.0) } else { (s / theta, (1.0 - c) / theta) };
-            let vt = v * t;
-            let shift = Vector2::new(a * vt.x - b * vt.y, b * vt.x + a * vt.y);
-            let moved = Pose2 { x: shift.x, y: shift.y, heading: theta };
-            *p = moved.transform_point(p);
+            let first_from_beam = velocity.motion_over(f64::from(beam) * beam_period_s);
+            *p = first_from_beam.transform_point(p);
         }
     }
 

@@ -28,6 +28,7 @@ mod pose;
 mod relation;
 mod scan;
 mod sensor_profile;
+mod twist;
 
 pub use angle::{line_angle_diff, wrap_angle};
 pub use bearings::{BearingTable, ScanPoints, polar_to_cartesian};
@@ -39,3 +40,4 @@ pub use pose::Pose2;
 pub use relation::Relation;
 pub use scan::Scan;
 pub use sensor_profile::SensorProfile;
+pub use twist::Twist2;

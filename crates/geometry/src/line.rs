@@ -16,24 +16,19 @@ use std::f64::consts::PI;
 /// `alpha` in (-pi/2, pi/2].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineSegment {
-    /// Angle of the normal in radians, in (-pi, pi].
-    pub alpha: f64,
-    /// Distance of the line from the frame origin in metres, `>= 0`.
-    pub d: f64,
-    /// Centroid of the fitted points (it lies on the line).
-    pub centroid: Point2<f64>,
-    /// Unit direction along the line, from `start` towards `end`.
-    pub direction: Vector2<f64>,
-    /// First endpoint: the first fitted point projected onto the line.
-    pub start: Point2<f64>,
-    /// Last endpoint: the last fitted point projected onto the line.
-    pub end: Point2<f64>,
-    /// Number of points the line was fitted to.
-    pub n_points: usize,
-    /// Standard deviation of the orthogonal point-to-line residuals, metres.
-    pub residual_std: f64,
-    /// Covariance of (`alpha`, `d`): rad², rad·m, m².
-    pub covariance: Matrix2<f64>,
+    // Invariants, kept by every constructor: `alpha` wrapped to (-pi, pi],
+    // `d >= 0`, `direction` the unit tangent `(-sin alpha, cos alpha)` up to
+    // sign, pointing from `start` to `end`, and `centroid`, `start`, `end`
+    // on the line (to rounding). Non-finite input gives non-finite fields.
+    alpha: f64,
+    d: f64,
+    centroid: Point2<f64>,
+    direction: Vector2<f64>,
+    start: Point2<f64>,
+    end: Point2<f64>,
+    n_points: usize,
+    residual_std: f64,
+    covariance: Matrix2<f64>,
 }
 
 /// The paper's `y = m x + n` (eq. 4): slope `m` (eq. 5) and intercept `n` (eq. 6).
@@ -72,6 +67,118 @@ impl LineSegment {
             residual_std: 0.0,
             covariance: Matrix2::zeros(),
         }
+    }
+
+    /// A segment restored from its stored Hessian form (a saved map): the
+    /// line `x cos(alpha) + y sin(alpha) = d` through `centroid`, from
+    /// `start` to `end`, as given. `alpha` is wrapped; a negative `d` is
+    /// made positive by turning the normal half a turn. The points are kept
+    /// as given, so they should lie on the line (a record written from a
+    /// [`LineSegment`] does); [`LineSegment::through`] projects points that
+    /// may not. Statistics are zero, see [`LineSegment::with_statistics`].
+    pub fn from_hessian(
+        alpha: f64,
+        d: f64,
+        centroid: Point2<f64>,
+        start: Point2<f64>,
+        end: Point2<f64>,
+    ) -> Self {
+        let (alpha, d) =
+            if d < 0.0 { (wrap_angle(alpha + PI), -d) } else { (wrap_angle(alpha), d) };
+        let mut line =
+            LineSegment::through(centroid, Vector2::new(-alpha.sin(), alpha.cos()), start, end);
+        line.alpha = alpha;
+        line.d = d;
+        line.start = start;
+        line.end = end;
+        line
+    }
+
+    /// The same line with its fit statistics: the number of points, the
+    /// standard deviation of their orthogonal residuals (metres) and the
+    /// covariance of (`alpha`, `d`) (rad², rad·m, m²).
+    pub fn with_statistics(
+        mut self,
+        n_points: usize,
+        residual_std_m: f64,
+        covariance: Matrix2<f64>,
+    ) -> Self {
+        self.n_points = n_points;
+        self.residual_std = residual_std_m;
+        self.covariance = covariance;
+        self
+    }
+
+    /// The same line with the number of points it was fitted to.
+    pub fn with_n_points(mut self, n_points: usize) -> Self {
+        self.n_points = n_points;
+        self
+    }
+
+    /// The same infinite line with its endpoints at `lo_m` and `hi_m` metres
+    /// along `direction` from the centroid (`centroid + direction * s`).
+    /// `lo_m > hi_m` is read as the interval `[hi_m, lo_m]`, so the direction
+    /// still points from `start` to `end`.
+    pub fn with_extent(mut self, lo_m: f64, hi_m: f64) -> Self {
+        let (lo, hi) = if lo_m > hi_m { (hi_m, lo_m) } else { (lo_m, hi_m) };
+        self.start = self.centroid + self.direction * lo;
+        self.end = self.centroid + self.direction * hi;
+        self
+    }
+
+    /// Angle of the normal in radians, in (-pi, pi].
+    #[inline]
+    pub fn alpha(&self) -> f64 {
+        self.alpha
+    }
+
+    /// Distance of the line from the frame origin in metres, `>= 0`.
+    #[inline]
+    pub fn d(&self) -> f64 {
+        self.d
+    }
+
+    /// Centroid of the fitted points (it lies on the line).
+    #[inline]
+    pub fn centroid(&self) -> Point2<f64> {
+        self.centroid
+    }
+
+    /// Unit direction along the line, from `start` towards `end`.
+    #[inline]
+    pub fn direction(&self) -> Vector2<f64> {
+        self.direction
+    }
+
+    /// First endpoint: the first fitted point projected onto the line.
+    #[inline]
+    pub fn start(&self) -> Point2<f64> {
+        self.start
+    }
+
+    /// Last endpoint: the last fitted point projected onto the line.
+    #[inline]
+    pub fn end(&self) -> Point2<f64> {
+        self.end
+    }
+
+    /// Number of points the line was fitted to (0 for a line made by
+    /// [`LineSegment::through`] alone).
+    #[inline]
+    pub fn n_points(&self) -> usize {
+        self.n_points
+    }
+
+    /// Standard deviation of the orthogonal point-to-line residuals, metres.
+    #[inline]
+    pub fn residual_std(&self) -> f64 {
+        self.residual_std
+    }
+
+    /// Covariance of (`alpha`, `d`): rad², rad·m, m².
+    #[inline]
+    pub fn covariance(&self) -> Matrix2<f64> {
+        self.covariance
     }
 
     /// Unit normal `(cos alpha, sin alpha)`.
@@ -119,7 +226,7 @@ impl LineSegment {
         let (alpha, d) = hessian(&centroid, &direction);
         // d' = d + n'.t  with alpha' = alpha + heading (+pi if flipped): the Jacobian
         // of (alpha', d') w.r.t. (alpha, d) is [[1, 0], [j, s]] with s = +-1.
-        let s = if (wrap_angle(alpha - self.alpha - parent_from_self.heading)).abs() < PI / 2.0 {
+        let s = if (wrap_angle(alpha - self.alpha - parent_from_self.heading())).abs() < PI / 2.0 {
             1.0
         } else {
             -1.0

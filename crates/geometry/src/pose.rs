@@ -1,6 +1,6 @@
 //! [`Pose2`]: a rigid transform in the plane (position and heading).
 
-use crate::wrap_angle;
+use crate::{Twist2, wrap_angle};
 use nalgebra::{Point2, Vector2};
 
 /// A 2D rigid transform `parent_from_child`: the child frame's origin at
@@ -20,12 +20,10 @@ use nalgebra::{Point2, Vector2};
 // Read through `Pose2::new`, which wraps the heading.
 #[cfg_attr(feature = "serde", serde(from = "PoseFields"))]
 pub struct Pose2 {
-    /// Position x in the parent frame, metres.
-    pub x: f64,
-    /// Position y in the parent frame, metres.
-    pub y: f64,
-    /// Heading in radians, counter-clockwise from the parent's x axis, in (-pi, pi].
-    pub heading: f64,
+    x: f64,
+    y: f64,
+    /// Wrapped to (-pi, pi] by every constructor (or not finite).
+    heading: f64,
 }
 
 /// A pose as written: read into [`Pose2`] through [`Pose2::new`].
@@ -53,6 +51,35 @@ impl Pose2 {
     /// The identity transform.
     pub const fn identity() -> Self {
         Pose2 { x: 0.0, y: 0.0, heading: 0.0 }
+    }
+
+    /// Position x in the parent frame, metres.
+    #[inline]
+    pub const fn x(&self) -> f64 {
+        self.x
+    }
+
+    /// Position y in the parent frame, metres.
+    #[inline]
+    pub const fn y(&self) -> f64 {
+        self.y
+    }
+
+    /// Heading in radians, counter-clockwise from the parent's x axis, in
+    /// (-pi, pi] (NaN or infinite only when constructed so).
+    #[inline]
+    pub const fn heading(&self) -> f64 {
+        self.heading
+    }
+
+    /// The same heading at another position.
+    pub fn with_translation(&self, x: f64, y: f64) -> Pose2 {
+        Pose2 { x, y, heading: self.heading }
+    }
+
+    /// The same position with another heading (wrapped).
+    pub fn with_heading(&self, heading: f64) -> Pose2 {
+        Pose2::new(self.x, self.y, heading)
     }
 
     /// The translation as a vector.
@@ -96,12 +123,12 @@ impl Pose2 {
     /// seconds: the increment divided by the time, in `self`'s frame
     /// (metres and radians per second; first order in the turn). `None`
     /// for a time that is not positive and finite.
-    pub fn velocity_to(&self, other: &Pose2, dt_s: f64) -> Option<Pose2> {
+    pub fn velocity_to(&self, other: &Pose2, dt_s: f64) -> Option<Twist2> {
         if !(dt_s.is_finite() && dt_s > 0.0) {
             return None;
         }
         let inc = self.between(other);
-        let v = Pose2 { x: inc.x / dt_s, y: inc.y / dt_s, heading: inc.heading / dt_s };
+        let v = Twist2::new(inc.x / dt_s, inc.y / dt_s, inc.heading / dt_s);
         v.is_finite().then_some(v)
     }
 

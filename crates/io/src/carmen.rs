@@ -382,8 +382,8 @@ mod tests {
         assert_eq!(s.scan.stamp_s, Some(12.5));
         assert!((f64::from(s.scan.angle_min) + PI / 2.0).abs() < 1e-6);
         assert_eq!(s.position, 4);
-        assert_eq!(s.pose.unwrap().x, 1.0);
-        assert_eq!(s.odometry.unwrap().x, 1.1);
+        assert_eq!(s.pose.unwrap().x(), 1.0);
+        assert_eq!(s.odometry.unwrap().x(), 1.1);
     }
 
     /// `ROBOTLASER1` carries the laser type: SICK LMS (0) and Hokuyo URG (2)

@@ -254,7 +254,7 @@ impl FoxgloveMcapWriter {
             .enumerate()
             .filter(|(_, l)| finite_segment(l))
             .map(|(k, l)| {
-                let ends = [[l.start.x, l.start.y], [l.end.x, l.end.y]];
+                let ends = [[l.start().x, l.start().y], [l.end().x, l.end().y]];
                 let mut e = Entity::lines(
                     stamp,
                     FRAME_SENSOR,
@@ -267,8 +267,8 @@ impl FoxgloveMcapWriter {
                 e.frame_locked = true;
                 e.metadata = vec![
                     KeyValue::new("id", k.to_string()),
-                    KeyValue::new("n_points", l.n_points.to_string()),
-                    KeyValue::new("residual_std_m", format!("{:.4}", l.residual_std)),
+                    KeyValue::new("n_points", l.n_points().to_string()),
+                    KeyValue::new("residual_std_m", format!("{:.4}", l.residual_std())),
                 ];
                 e
             })
@@ -287,7 +287,9 @@ impl FoxgloveMcapWriter {
                 .lines()
                 .iter()
                 .filter(|m| m.status == status && finite_segment(&m.line))
-                .flat_map(|m| [[m.line.start.x, m.line.start.y], [m.line.end.x, m.line.end.y]])
+                .flat_map(|m| {
+                    [[m.line.start().x, m.line.start().y], [m.line.end().x, m.line.end().y]]
+                })
                 .collect();
             let mut e =
                 Entity::lines(stamp, FRAME_WORLD, format!("map-{name}"), &ends, 0.05, colour);
@@ -323,7 +325,7 @@ impl FoxgloveMcapWriter {
         kind: PoseKind,
         pose: &Pose2,
     ) -> Result<(), IoError> {
-        if !(pose.x.is_finite() && pose.y.is_finite() && pose.heading.is_finite()) {
+        if !(pose.x().is_finite() && pose.y().is_finite() && pose.heading().is_finite()) {
             return Ok(());
         }
         let p = FoxPose::of(pose);
@@ -425,7 +427,7 @@ fn mcap_error(path: &Path, e: mcap::McapError) -> IoError {
 }
 
 fn finite_segment(l: &LineSegment) -> bool {
-    [l.start.x, l.start.y, l.end.x, l.end.y].iter().all(|v| v.is_finite())
+    [l.start().x, l.start().y, l.end().x, l.end().y].iter().all(|v| v.is_finite())
 }
 
 // The Foxglove messages, as serde writes them (field names are Foxglove's).
@@ -471,9 +473,9 @@ impl FoxPose {
 
     /// A planar pose: a rotation about z by the heading.
     fn of(p: &Pose2) -> Self {
-        let half = 0.5 * p.heading;
+        let half = 0.5 * p.heading();
         FoxPose {
-            position: Vector3 { x: p.x, y: p.y, z: 0.0 },
+            position: Vector3 { x: p.x(), y: p.y(), z: 0.0 },
             orientation: Quaternion { x: 0.0, y: 0.0, z: half.sin(), w: half.cos() },
         }
     }

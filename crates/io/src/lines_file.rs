@@ -74,13 +74,13 @@ impl LineRecord {
     /// The record of a line, with its beam range when known.
     pub fn new(l: &LineSegment, beams: Option<(u32, u32)>) -> Self {
         LineRecord {
-            alpha_rad: l.alpha,
-            d_m: l.d,
-            start: [l.start.x, l.start.y],
-            end: [l.end.x, l.end.y],
+            alpha_rad: l.alpha(),
+            d_m: l.d(),
+            start: [l.start().x, l.start().y],
+            end: [l.end().x, l.end().y],
             length_m: l.length(),
-            n_points: l.n_points,
-            residual_std_m: l.residual_std,
+            n_points: l.n_points(),
+            residual_std_m: l.residual_std(),
             first_beam: beams.map(|b| b.0),
             last_beam: beams.map(|b| b.1),
             residual_ratio: None,
@@ -299,16 +299,16 @@ pub fn map_csv_text(map: &LineMap) -> String {
             s,
             "{},{},{},{},{},{},{},{},{},{},{}",
             m.id.0,
-            l.alpha,
-            l.d,
-            l.start.x,
-            l.start.y,
-            l.end.x,
-            l.end.y,
+            l.alpha(),
+            l.d(),
+            l.start().x,
+            l.start().y,
+            l.end().x,
+            l.end().y,
             l.length(),
-            l.n_points,
+            l.n_points(),
             m.observations,
-            l.residual_std
+            l.residual_std()
         );
     }
     s

@@ -181,13 +181,19 @@ pub fn check_record(record: &LogRecord) -> Result<(), String> {
     }
     for (p, name) in poses.iter().zip(["pose", "odometry"]) {
         let Some(p) = p else { continue };
-        if !(p.x.is_finite() && p.y.is_finite() && p.heading.is_finite()) {
-            return Err(format!("the {name} is not finite ({}, {}, {})", p.x, p.y, p.heading));
+        if !(p.x().is_finite() && p.y().is_finite() && p.heading().is_finite()) {
+            return Err(format!(
+                "the {name} is not finite ({}, {}, {})",
+                p.x(),
+                p.y(),
+                p.heading()
+            ));
         }
-        if p.x.abs() > MAX_COORDINATE_M || p.y.abs() > MAX_COORDINATE_M {
+        if p.x().abs() > MAX_COORDINATE_M || p.y().abs() > MAX_COORDINATE_M {
             return Err(format!(
                 "the {name} ({}, {}) m lies beyond ±{MAX_COORDINATE_M:e} m",
-                p.x, p.y
+                p.x(),
+                p.y()
             ));
         }
     }
@@ -297,11 +303,11 @@ mod tests {
         assert!(
             check_record(&scan(Pose2::new(1e16, 0.0, 0.0), 1.0)).unwrap_err().contains("beyond")
         );
-        let nan = Pose2 { x: f64::NAN, y: 0.0, heading: 0.0 };
+        let nan = Pose2::new(f64::NAN, 0.0, 0.0);
         assert!(check_record(&scan(nan, 1.0)).unwrap_err().contains("not finite"));
         assert!(check_record(&scan(Pose2::default(), f64::NAN)).unwrap_err().contains("timestamp"));
         let odom = LogRecord::Odometry(OdometryRecord {
-            pose: Pose2 { x: 0.0, y: 0.0, heading: f64::INFINITY },
+            pose: Pose2::new(0.0, 0.0, f64::INFINITY),
             stamp_s: 0.0,
             position: 1,
         });

@@ -48,7 +48,7 @@ fn write_sample(path: &std::path::Path) -> BTreeMap<&'static str, u64> {
         w.write_pose(stamp, PoseKind::Source, &pose).unwrap();
         w.write_pose(stamp, PoseKind::Corrected, &pose).unwrap();
         w.write_pose(stamp, PoseKind::Truth, &pose).unwrap();
-        w.write_pose(stamp, PoseKind::Truth, &Pose2 { x: f64::NAN, y: 0.0, heading: 0.0 }).unwrap();
+        w.write_pose(stamp, PoseKind::Truth, &Pose2::new(f64::NAN, 0.0, 0.0)).unwrap();
         w.write_map(stamp, &map).unwrap();
     }
     w.finish().unwrap()

@@ -60,13 +60,13 @@ impl MapLine {
             scans_seen: 1,
             first_scan: scan,
             last_scan: scan,
-            observed_scatter: line.n_points as f64 * line.residual_std.powi(2),
+            observed_scatter: line.n_points() as f64 * line.residual_std().powi(2),
         }
     }
 
     /// Rms distance of the absorbed points from the line, metres.
     pub fn rms_m(&self) -> f64 {
-        (self.moments.orthogonal_scatter(&self.line.direction) / self.moments.n.max(1) as f64)
+        (self.moments.orthogonal_scatter(&self.line.direction()) / self.moments.n.max(1) as f64)
             .sqrt()
     }
 
@@ -103,8 +103,8 @@ impl Extremes {
     /// The extent of one observation, nothing pending.
     pub fn of(line: &LineSegment) -> Self {
         Extremes {
-            low: line.start,
-            high: line.end,
+            low: line.start(),
+            high: line.end(),
             pending_low: [None; 2],
             pending_high: [None; 2],
         }
@@ -115,7 +115,7 @@ impl Extremes {
     /// beyond the extent is accepted only as far as another observation
     /// beyond it (or within 5 cm of it) confirms; otherwise it waits.
     fn add(&mut self, line: &LineSegment, points: [Point2<f64>; 2], robust: bool) {
-        let s = |p: &Point2<f64>| (p - line.centroid).dot(&line.direction);
+        let s = |p: &Point2<f64>| (p - line.centroid()).dot(&line.direction());
         let (a, b) = if s(&points[0]) <= s(&points[1]) {
             (points[0], points[1])
         } else {
@@ -134,7 +134,7 @@ impl Extremes {
 
     /// The accepted extent `(lo, hi)` along `line`.
     fn extent(&self, line: &LineSegment) -> (f64, f64) {
-        let s = |p: &Point2<f64>| (p - line.centroid).dot(&line.direction);
+        let s = |p: &Point2<f64>| (p - line.centroid()).dot(&line.direction());
         let (lo, hi) = (s(&self.low), s(&self.high));
         if lo <= hi { (lo, hi) } else { (hi, lo) }
     }
@@ -401,24 +401,24 @@ impl LineMap {
         gate: &MatchGate,
         mut f: impl FnMut(usize, LineDistance),
     ) {
-        if !(line.alpha.is_finite()
-            && line.d.is_finite()
-            && line.centroid.coords.iter().all(|v| v.is_finite()))
+        if !(line.alpha().is_finite()
+            && line.d().is_finite()
+            && line.centroid().coords.iter().all(|v| v.is_finite()))
         {
             return;
         }
-        self.grid.for_each_near(&line.centroid, gate.max_d_rho_m, |id| {
+        self.grid.for_each_near(&line.centroid(), gate.max_d_rho_m, |id| {
             let index = id as usize;
             let m = &self.lines[index];
             // The angle first: it rejects most candidates without a sine.
-            if line_angle_diff(m.line.alpha, line.alpha).abs() >= gate.max_d_alpha_rad {
+            if line_angle_diff(m.line.alpha(), line.alpha()).abs() >= gate.max_d_alpha_rad {
                 return;
             }
             let normal = m.line.normal();
             let distance = line_distance_from(&m.line, &normal, line, self.config.centroid_term);
             let offset_ok = gate
                 .max_offset_m
-                .is_none_or(|max| (normal.dot(&line.centroid.coords) - m.line.d).abs() < max);
+                .is_none_or(|max| (normal.dot(&line.centroid().coords) - m.line.d()).abs() < max);
             let side_ok = !self.config.sided || same_side(m, viewpoint);
             if distance.d_alpha.abs() < gate.max_d_alpha_rad
                 && distance.d_rho < gate.max_d_rho_m
@@ -449,7 +449,7 @@ impl LineMap {
         line: &LineSegment,
         moments: &Moments,
     ) -> Option<(LineId, Option<Match>)> {
-        let viewpoint = Point2::new(world_from_sensor.x, world_from_sensor.y);
+        let viewpoint = Point2::new(world_from_sensor.x(), world_from_sensor.y());
         self.insert_seen_from(
             &line.transformed(world_from_sensor),
             &moments.transformed(world_from_sensor),
@@ -478,9 +478,9 @@ impl LineMap {
         moments: &Moments,
         viewpoint: Option<&Point2<f64>>,
     ) -> Option<(LineId, Option<Match>)> {
-        if !(line.alpha.is_finite()
-            && line.d.is_finite()
-            && line.start.coords.iter().chain(line.end.coords.iter()).all(|v| v.is_finite()))
+        if !(line.alpha().is_finite()
+            && line.d().is_finite()
+            && line.start().coords.iter().chain(line.end().coords.iter()).all(|v| v.is_finite()))
         {
             return None;
         }
@@ -495,7 +495,7 @@ impl LineMap {
             }
             None => {
                 if self.config.max_new_alpha_std_rad.is_some_and(|max| {
-                    let std = line.covariance[(0, 0)].sqrt();
+                    let std = line.covariance()[(0, 0)].sqrt();
                     std.is_nan() || std > max
                 }) {
                     return None;
@@ -503,7 +503,7 @@ impl LineMap {
                 let id = LineId(self.next_id);
                 self.next_id += 1;
                 let index = self.lines.len() as u32;
-                self.grid.insert(index, &line.start, &line.end);
+                self.grid.insert(index, &line.start(), &line.end());
                 let mut new = MapLine::new(id, *line, *moments, self.scan);
                 new.facing = viewpoint.and_then(|v| facing(line, v));
                 if let Some(life) = self.config.lifecycle {
@@ -529,7 +529,7 @@ impl LineMap {
         let mut base = old;
         if refine {
             let merged = m.moments.merge(moments);
-            if let Some(refit) = line_from_moments(&merged, &old.start, &old.end) {
+            if let Some(refit) = line_from_moments(&merged, &old.start(), &old.end()) {
                 base = refit;
                 m.moments = merged;
             }
@@ -538,14 +538,12 @@ impl LineMap {
         }
         // Extent: along the (possibly refitted) line, from the accepted
         // endpoint observations.
-        m.extremes.add(&base, [line.start, line.end], self.config.robust_extent);
+        m.extremes.add(&base, [line.start(), line.end()], self.config.robust_extent);
         let (lo, hi) = m.extremes.extent(&base);
-        base.start = base.centroid + base.direction * lo;
-        base.end = base.centroid + base.direction * hi;
-        base.n_points = m.moments.n;
+        base = base.with_extent(lo, hi).with_n_points(m.moments.n);
         m.line = base;
         m.observations += 1;
-        m.observed_scatter += line.n_points as f64 * line.residual_std.powi(2);
+        m.observed_scatter += line.n_points() as f64 * line.residual_std().powi(2);
         if m.last_scan != self.scan {
             m.last_scan = self.scan;
             m.scans_seen += 1;
@@ -553,7 +551,7 @@ impl LineMap {
         if let Some(life) = self.config.lifecycle {
             m.status = life.status(m.scans_seen, m.rms_m(), m.observed_rms_m());
         }
-        let (a, b) = (m.line.start, m.line.end);
+        let (a, b) = (m.line.start(), m.line.end());
         self.grid.insert(index as u32, &a, &b);
     }
 
@@ -573,7 +571,7 @@ impl LineMap {
             let me = &self.lines[i];
             let mut other = None;
             let reach = me.line.length() / 2.0 + gate.max_gap_m + self.config.grid_cell_m;
-            self.grid.for_each_near(&me.line.centroid, reach, |id| {
+            self.grid.for_each_near(&me.line.centroid(), reach, |id| {
                 let j = id as usize;
                 if other.is_some() || j == i {
                     return;
@@ -584,7 +582,7 @@ impl LineMap {
                     _ => true,
                 };
                 if facing_ok
-                    && line_angle_diff(me.line.alpha, o.line.alpha).abs()
+                    && line_angle_diff(me.line.alpha(), o.line.alpha()).abs()
                         < self.config.max_d_alpha_rad
                     && within_merge_gate(&me.line, &o.line, &gate)
                     && within_merge_gate(&o.line, &me.line, &gate)
@@ -607,16 +605,15 @@ impl LineMap {
     fn absorb_line(&mut self, index: usize, other: &MapLine) {
         let m = &mut self.lines[index];
         let merged = m.moments.merge(&other.moments);
-        let (lo_pt, hi_pt) = (m.line.start, m.line.end);
+        let (lo_pt, hi_pt) = (m.line.start(), m.line.end());
         if let Some(refit) = line_from_moments(&merged, &lo_pt, &hi_pt) {
             let mut base = refit;
-            let s = |p: &Point2<f64>| (p - base.centroid).dot(&base.direction);
-            let along = [m.line.start, m.line.end, other.line.start, other.line.end].map(|p| s(&p));
+            let s = |p: &Point2<f64>| (p - base.centroid()).dot(&base.direction());
+            let along =
+                [m.line.start(), m.line.end(), other.line.start(), other.line.end()].map(|p| s(&p));
             let lo = along.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = along.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            base.start = base.centroid + base.direction * lo;
-            base.end = base.centroid + base.direction * hi;
-            base.n_points = merged.n;
+            base = base.with_extent(lo, hi).with_n_points(merged.n);
             m.line = base;
             m.extremes = Extremes::of(&base);
         }
@@ -629,7 +626,7 @@ impl LineMap {
         if let Some(life) = self.config.lifecycle {
             m.status = life.status(m.scans_seen, m.rms_m(), m.observed_rms_m());
         }
-        let (a, b) = (m.line.start, m.line.end);
+        let (a, b) = (m.line.start(), m.line.end());
         self.grid.insert(index as u32, &a, &b);
     }
 
@@ -637,7 +634,7 @@ impl LineMap {
     pub fn from_lines(config: MapConfig, lines: Vec<MapLine>) -> Result<Self, ConfigError> {
         let mut map = LineMap::new(config)?;
         for (i, l) in lines.iter().enumerate() {
-            map.grid.insert(i as u32, &l.line.start, &l.line.end);
+            map.grid.insert(i as u32, &l.line.start(), &l.line.end());
             map.index_of.insert(l.id, i);
             if l.status == LineStatus::Tentative {
                 map.tentative.push_back((l.first_scan, l.id));
@@ -655,12 +652,13 @@ impl LineMap {
 /// of the map line's along the line.
 fn within_merge_gate(map: &LineSegment, new: &LineSegment, gate: &MergeGate) -> bool {
     let n = map.normal();
-    let offsets_ok =
-        [new.start, new.end].iter().all(|p| (n.dot(&p.coords) - map.d).abs() <= gate.max_offset_m);
-    let along = |p: &Point2<f64>| (p - map.start).dot(&map.direction);
-    let (a, b) = (along(&new.start), along(&new.end));
+    let offsets_ok = [new.start(), new.end()]
+        .iter()
+        .all(|p| (n.dot(&p.coords) - map.d()).abs() <= gate.max_offset_m);
+    let along = |p: &Point2<f64>| (p - map.start()).dot(&map.direction());
+    let (a, b) = (along(&new.start()), along(&new.end()));
     let (lo, hi) = (a.min(b), a.max(b));
-    let map_end = along(&map.end);
+    let map_end = along(&map.end());
     let (map_lo, map_hi) = (map_end.min(0.0), map_end.max(0.0));
     let gap = (lo - map_hi).max(map_lo - hi).max(0.0);
     offsets_ok && gap <= gate.max_gap_m
@@ -669,7 +667,7 @@ fn within_merge_gate(map: &LineSegment, new: &LineSegment, gate: &MergeGate) -> 
 /// The unit normal of `line` pointing to `viewpoint`'s side; `None` when
 /// the viewpoint lies on the line or is not finite.
 fn facing(line: &LineSegment, viewpoint: &Point2<f64>) -> Option<Vector2<f64>> {
-    let s = line.normal().dot(&viewpoint.coords) - line.d;
+    let s = line.normal().dot(&viewpoint.coords) - line.d();
     (s.is_finite() && s != 0.0).then(|| line.normal() * s.signum())
 }
 
@@ -678,7 +676,7 @@ fn facing(line: &LineSegment, viewpoint: &Point2<f64>) -> Option<Vector2<f64>> {
 fn same_side(m: &MapLine, viewpoint: Option<&Point2<f64>>) -> bool {
     let (Some(facing), Some(v)) = (m.facing, viewpoint) else { return true };
     let n = m.line.normal();
-    (n.dot(&v.coords) - m.line.d) * n.dot(&facing) > 0.0
+    (n.dot(&v.coords) - m.line.d()) * n.dot(&facing) > 0.0
 }
 
 #[cfg(test)]
@@ -705,7 +703,7 @@ mod tests {
         assert_eq!(id, id2);
         assert!(m2.is_some());
         let l = &map.lines()[0].line;
-        assert!((l.d - 3.0).abs() < 1e-12, "paper keeps the map line's parameters");
+        assert!((l.d() - 3.0).abs() < 1e-12, "paper keeps the map line's parameters");
         assert!((l.length() - 1.5).abs() < 1e-9);
         assert_eq!(map.lines()[0].observations, 2);
     }
@@ -723,7 +721,7 @@ mod tests {
         let l = &map.lines()[0].line;
         assert!((l.length() - 2.0).abs() < 0.01, "{l:?}");
         assert_eq!(map.lines()[0].moments.n, 63);
-        assert!(l.centroid.x > 3.0 && l.centroid.x < 3.03);
+        assert!(l.centroid().x > 3.0 && l.centroid().x < 3.03);
     }
 
     #[test]
@@ -779,21 +777,24 @@ mod tests {
     #[test]
     fn uncertain_lines_do_not_start_map_lines() {
         let mut map = LineMap::new(MapConfig::default()).unwrap();
-        let (mut a, ma) = wall(3.0, 0.0, 1.0);
-        a.covariance[(0, 0)] = 2f64.to_radians().powi(2);
-        assert!(map.insert(&a, &ma).is_none());
-        a.covariance[(0, 0)] = 0.5f64.to_radians().powi(2);
-        assert!(map.insert(&a, &ma).is_some());
+        let (a, ma) = wall(3.0, 0.0, 1.0);
+        let with_alpha_std = |deg: f64| {
+            let mut c = a.covariance();
+            c[(0, 0)] = deg.to_radians().powi(2);
+            a.with_statistics(a.n_points(), a.residual_std(), c)
+        };
+        assert!(map.insert(&with_alpha_std(2.0), &ma).is_none());
+        assert!(map.insert(&with_alpha_std(0.5), &ma).is_some());
         // Once the map line exists, an uncertain observation is absorbed.
-        a.covariance[(0, 0)] = 2f64.to_radians().powi(2);
-        assert!(map.insert(&a, &ma).is_some_and(|(_, m)| m.is_some()));
+        assert!(map.insert(&with_alpha_std(2.0), &ma).is_some_and(|(_, m)| m.is_some()));
     }
 
     #[test]
     fn non_finite_lines_are_ignored() {
         let mut map = LineMap::new(MapConfig::paper()).unwrap();
-        let (mut a, ma) = wall(3.0, 0.0, 1.0);
-        a.alpha = f64::NAN;
+        let (a, ma) = wall(3.0, 0.0, 1.0);
+        let a = LineSegment::from_hessian(f64::NAN, a.d(), a.centroid(), a.start(), a.end());
+        assert!(a.alpha().is_nan());
         assert!(map.insert(&a, &ma).is_none());
         assert!(map.find_match(&a).is_none());
         assert!(map.is_empty());
@@ -810,7 +811,7 @@ mod tests {
             let line = world_wall.transformed(&sensor_from_world);
             let moments = world_moments.transformed(&sensor_from_world);
             observed.insert_observed(&world_from_sensor, &line, &moments).unwrap();
-            let viewpoint = Point2::new(world_from_sensor.x, world_from_sensor.y);
+            let viewpoint = Point2::new(world_from_sensor.x(), world_from_sensor.y());
             by_hand.insert_seen_from(
                 &line.transformed(&world_from_sensor),
                 &moments.transformed(&world_from_sensor),
@@ -820,7 +821,7 @@ mod tests {
         assert_eq!(observed.lines(), by_hand.lines());
         assert_eq!(observed.len(), 1);
         let m = &observed.lines()[0];
-        assert!((m.line.d - 3.0).abs() < 1e-9 && m.line.alpha.abs() < 1e-9, "{:?}", m.line);
+        assert!((m.line.d() - 3.0).abs() < 1e-9 && m.line.alpha().abs() < 1e-9, "{:?}", m.line);
         assert!((m.moments.mean - world_moments.mean).norm() < 1e-9);
         // Seen from x < 3: the side is remembered.
         assert!(m.facing.is_some());
@@ -936,8 +937,8 @@ mod tests {
                 })
                 .collect();
             let m = Moments::from_points(&pts);
-            let mut l = line_from_moments(&m, &pts[0], &pts[20]).unwrap();
-            l.residual_std = 0.001;
+            let l = line_from_moments(&m, &pts[0], &pts[20]).unwrap();
+            let l = l.with_statistics(l.n_points(), 0.001, l.covariance());
             (l, m)
         };
         for k in 0..6 {
@@ -952,8 +953,8 @@ mod tests {
         // A straight wall seen as often stays confirmed.
         let mut flat = LineMap::new(config).unwrap();
         for k in 0..6 {
-            let (mut l, m) = wall(3.0, 0.1 * k as f64, 1.0 + 0.1 * k as f64);
-            l.residual_std = 0.002;
+            let (l, m) = wall(3.0, 0.1 * k as f64, 1.0 + 0.1 * k as f64);
+            let l = l.with_statistics(l.n_points(), 0.002, l.covariance());
             flat.insert(&l, &m);
         }
         assert!(flat.lines().iter().all(|l| l.is_confirmed()), "{:?}", flat.lines());

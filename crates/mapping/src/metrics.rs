@@ -57,18 +57,18 @@ pub(crate) fn line_distance_from(
     new: &LineSegment,
     term: CentroidTerm,
 ) -> LineDistance {
-    let d_alpha = line_angle_diff(map.alpha, new.alpha);
-    let d_d = (map_normal.dot(&new.centroid.coords) - map.d).abs();
+    let d_alpha = line_angle_diff(map.alpha(), new.alpha());
+    let d_d = (map_normal.dot(&new.centroid().coords) - map.d()).abs();
     let d_c = match term {
-        CentroidTerm::Centroid => (map.centroid - new.centroid).norm(),
-        CentroidTerm::SegmentGap => segment_gap(map, &new.centroid),
+        CentroidTerm::Centroid => (map.centroid() - new.centroid()).norm(),
+        CentroidTerm::SegmentGap => segment_gap(map, &new.centroid()),
     };
     LineDistance { d_alpha, d_rho: d_d + d_c }
 }
 
 /// Distance along the line from `p`'s projection to the segment (0 inside it).
 fn segment_gap(segment: &LineSegment, p: &Point2<f64>) -> f64 {
-    let s = (p - segment.start).dot(&segment.direction);
+    let s = (p - segment.start()).dot(&segment.direction());
     let len = segment.length();
     if s < 0.0 {
         -s

@@ -122,17 +122,17 @@ impl MapRecord {
                 let l = &m.line;
                 MapLineRecord {
                     id: m.id.0,
-                    alpha: l.alpha,
-                    d: l.d,
-                    start: [l.start.x, l.start.y],
-                    end: [l.end.x, l.end.y],
-                    n_points: l.n_points,
-                    residual_std_m: l.residual_std,
+                    alpha: l.alpha(),
+                    d: l.d(),
+                    start: [l.start().x, l.start().y],
+                    end: [l.end().x, l.end().y],
+                    n_points: l.n_points(),
+                    residual_std_m: l.residual_std(),
                     covariance: [
-                        l.covariance[(0, 0)],
-                        l.covariance[(0, 1)],
-                        l.covariance[(1, 0)],
-                        l.covariance[(1, 1)],
+                        l.covariance()[(0, 0)],
+                        l.covariance()[(0, 1)],
+                        l.covariance()[(1, 0)],
+                        l.covariance()[(1, 1)],
                     ],
                     centroid: [m.moments.mean.x, m.moments.mean.y],
                     scatter: [m.moments.sxx, m.moments.sxy, m.moments.syy],
@@ -156,23 +156,22 @@ impl MapRecord {
             .map(|r| {
                 let start = Point2::new(r.start[0], r.start[1]);
                 let end = Point2::new(r.end[0], r.end[1]);
-                let mut line = LineSegment::through(
+                let line = LineSegment::from_hessian(
+                    r.alpha,
+                    r.d,
                     Point2::new(r.centroid[0], r.centroid[1]),
-                    Vector2::new(-r.alpha.sin(), r.alpha.cos()),
                     start,
                     end,
-                );
-                line.alpha = r.alpha;
-                line.d = r.d;
-                line.start = start;
-                line.end = end;
-                line.n_points = r.n_points;
-                line.residual_std = r.residual_std_m;
-                line.covariance = Matrix2::new(
-                    r.covariance[0],
-                    r.covariance[1],
-                    r.covariance[2],
-                    r.covariance[3],
+                )
+                .with_statistics(
+                    r.n_points,
+                    r.residual_std_m,
+                    Matrix2::new(
+                        r.covariance[0],
+                        r.covariance[1],
+                        r.covariance[2],
+                        r.covariance[3],
+                    ),
                 );
                 let moments = Moments {
                     n: r.n_points,
@@ -194,7 +193,7 @@ impl MapRecord {
                 m.status = r.status;
                 m.scans_seen = r.scans_seen.unwrap_or(r.observations);
                 m.observed_scatter =
-                    r.observed_scatter.unwrap_or(moments.orthogonal_scatter(&line.direction));
+                    r.observed_scatter.unwrap_or(moments.orthogonal_scatter(&line.direction()));
                 m
             })
             .collect();

@@ -48,12 +48,12 @@ impl OdometryModel {
             let inc = truth[k - 1].between(&truth[k]);
             let mut rng = stream_rng(seed, Stream::Odometry, k as u64);
             let mut normal = || -> f64 { StandardNormal.sample(&mut rng) };
-            let dh = inc.heading
+            let dh = inc.heading()
                 + self.heading_rate_bias_rad_s * dt_s
                 + self.heading_random_walk_rad_sqrt_s * sqrt_dt * normal();
             let scale = 1.0 + self.speed_scale_error;
-            let dx = inc.x * scale + self.position_random_walk_m_sqrt_s * sqrt_dt * normal();
-            let dy = inc.y * scale + self.position_random_walk_m_sqrt_s * sqrt_dt * normal();
+            let dx = inc.x() * scale + self.position_random_walk_m_sqrt_s * sqrt_dt * normal();
+            let dy = inc.y() * scale + self.position_random_walk_m_sqrt_s * sqrt_dt * normal();
             let prev = out[k - 1];
             out.push(prev.compose(&Pose2::new(dx, dy, dh)));
         }
@@ -96,9 +96,9 @@ mod tests {
         let truth: Vec<_> = (0..101).map(|k| Pose2::new(0.1 * k as f64, 0.0, 0.0)).collect();
         let m = OdometryModel { heading_rate_bias_rad_s: 0.01, ..Default::default() };
         let odo = m.corrupt(&truth, 0.1, 1);
-        assert!((odo[100].heading - 0.1).abs() < 1e-12);
+        assert!((odo[100].heading() - 0.1).abs() < 1e-12);
         let exact = OdometryModel::default().corrupt(&truth, 0.1, 1);
-        assert!((exact[100].x - 10.0).abs() < 1e-9 && exact[100].y.abs() < 1e-9);
+        assert!((exact[100].x() - 10.0).abs() < 1e-9 && exact[100].y().abs() < 1e-9);
     }
 
     #[test]
@@ -120,7 +120,7 @@ mod tests {
         let m = OdometryModel { heading_rate_bias_rad_s: 0.1, ..Default::default() };
         // Steps of 1 s, 3 s, then a backwards stamp (counted as 0 s).
         let odo = m.corrupt_stamped(&truth, &[0.0, 1.0, 4.0, 3.0], 1);
-        assert!((odo[3].heading - 0.4).abs() < 1e-12, "{:?}", odo[3]);
+        assert!((odo[3].heading() - 0.4).abs() < 1e-12, "{:?}", odo[3]);
         let uniform = m.corrupt(&truth, 0.5, 9);
         assert_eq!(m.corrupt_stamped(&truth, &[0.0, 0.5, 1.0, 1.5], 9), uniform);
         assert_eq!(m.corrupt_stamped(&truth, &[0.0, 0.5], 9).len(), 2);

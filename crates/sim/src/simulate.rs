@@ -225,12 +225,12 @@ impl Simulator {
         let s = &self.sensor;
         let mut beams = Vec::with_capacity(s.beams);
         let mut hint = None;
-        let (mut sin_h, mut cos_h) = world_from_sensor.heading.sin_cos();
+        let (mut sin_h, mut cos_h) = world_from_sensor.heading().sin_cos();
         for i in 0..s.beams {
             let t = time_s + if s.motion_skew { i as f64 * s.beam_period_s() } else { 0.0 };
             let pose = if s.motion_skew { self.trajectory.pose_at(t) } else { *world_from_sensor };
             if s.motion_skew {
-                (sin_h, cos_h) = pose.heading.sin_cos();
+                (sin_h, cos_h) = pose.heading().sin_cos();
             }
             // The beam's direction in the sensor frame, then rotated into the world.
             let ((c, sn), horizontal) = match s.tilt {
@@ -243,7 +243,7 @@ impl Simulator {
                 }
             };
             let dir = Vector2::new(cos_h * c - sin_h * sn, sin_h * c + cos_h * sn);
-            let origin = Point2::new(pose.x, pose.y);
+            let origin = Point2::new(pose.x(), pose.y());
             let hit = self.world.cast_hinted(&origin, &dir, s.range_max_m * horizontal, hint);
             hint = hit.map(|h| h.wall).or(hint);
             beams.push(match hit {

@@ -31,7 +31,7 @@ impl Trajectory {
         let mut legs = Vec::new();
         let mut t = 0.0;
         let mut pose = start;
-        let start_point = Point2::new(start.x, start.y);
+        let start_point = Point2::new(start.x(), start.y());
         let mut targets: Vec<Point2<f64>> = Vec::new();
         for lap in 0..laps.max(1) {
             if lap > 0 {
@@ -40,17 +40,17 @@ impl Trajectory {
             targets.extend_from_slice(waypoints);
         }
         for target in targets {
-            let here = Point2::new(pose.x, pose.y);
+            let here = Point2::new(pose.x(), pose.y());
             let d = target - here;
             let dist = d.norm();
             if dist < 1e-9 {
                 continue;
             }
             let heading = d.y.atan2(d.x);
-            let delta = wrap_angle(heading - pose.heading);
+            let delta = wrap_angle(heading - pose.heading());
             if delta.abs() > 1e-12 {
                 let dur = delta.abs() / yaw_rate_rad_s;
-                legs.push((t, dur, Leg::Turn { at: here, from: pose.heading, delta }));
+                legs.push((t, dur, Leg::Turn { at: here, from: pose.heading(), delta }));
                 t += dur;
             }
             let dur = dist / speed_m_s;
@@ -110,13 +110,14 @@ mod tests {
         // 2 s drive, 1 s turn of 90°, 2 s drive.
         assert!((t.duration_s() - 5.0).abs() < 1e-12);
         let p = t.pose_at(1.0);
-        assert!((p.x - 1.0).abs() < 1e-12 && p.heading.abs() < 1e-12);
+        assert!((p.x() - 1.0).abs() < 1e-12 && p.heading().abs() < 1e-12);
         let p = t.pose_at(2.5);
         assert!(
-            (p.x - 2.0).abs() < 1e-12 && (p.heading - std::f64::consts::FRAC_PI_4).abs() < 1e-12
+            (p.x() - 2.0).abs() < 1e-12
+                && (p.heading() - std::f64::consts::FRAC_PI_4).abs() < 1e-12
         );
         let p = t.pose_at(100.0);
-        assert!((p.y - 2.0).abs() < 1e-12);
+        assert!((p.y() - 2.0).abs() < 1e-12);
         assert_eq!(t.pose_at(f64::NAN), t.pose_at(0.0));
     }
 }
