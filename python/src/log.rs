@@ -98,7 +98,8 @@ pub fn read_log_py(
                         Err(_) => ControlFlow::Break(()),
                     }
                 }
-                LogRecord::Odometry(_) => ControlFlow::Continue(()),
+                // Odometry alone, and records of kinds added later.
+                _ => ControlFlow::Continue(()),
             });
             if let Err(e) = read {
                 let _ = tx.send(Err(e));

@@ -474,6 +474,8 @@ fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> 
                 lines: Some(detector.detect(&s.scan).lines.iter().map(SensorLine::from).collect()),
             },
             LogRecord::Odometry(o) => IntelRecord { time_s: o.stamp_s, pose: o.pose, lines: None },
+            // A CARMEN log has scans and odometry only.
+            _ => continue,
         });
     }
     records.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));

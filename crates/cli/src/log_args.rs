@@ -72,7 +72,7 @@ impl LogArgs {
                 named = s.sensor;
                 ControlFlow::Break(())
             }
-            LogRecord::Odometry(_) => ControlFlow::Continue(()),
+            _ => ControlFlow::Continue(()),
         })?;
         Ok(named)
     }

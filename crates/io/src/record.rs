@@ -4,6 +4,7 @@ use pcaline_geometry::{Pose2, Scan, SensorProfile};
 
 /// One record of a log.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum LogRecord {
     /// A laser scan, with the poses the log gives for it.
     Scan(ScanRecord),
