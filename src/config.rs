@@ -64,13 +64,17 @@ impl Config {
 
     /// The detector that adapts to the sensor it is given: the default
     /// estimating the range noise and range grid from each scan
-    /// ([`NoiseEstimation::standard`]) and refusing lines over curved
-    /// surfaces ([`pcaline_fitting::StraightnessTest::standard`]). Untold, it
-    /// finds walls of a 30 mm sensor as well as the detector told 30 mm, and
-    /// keeps ranges rounded to 5 cm from shredding walls (docs/accuracy.md).
+    /// ([`NoiseEstimation::standard`]), refusing lines over curved
+    /// surfaces ([`pcaline_fitting::StraightnessTest::standard`]), and
+    /// cutting lines whose points two lines fit far better, such as a wall
+    /// and its end face ([`pcaline_fitting::KinkTest::standard`]). Untold,
+    /// it finds walls of a 30 mm sensor as well as the detector told 30 mm,
+    /// and keeps ranges rounded to 5 cm from shredding walls
+    /// (docs/accuracy.md).
     pub fn adaptive() -> Self {
         let mut c = Config::default().with_noise_estimation(NoiseEstimation::standard());
         c.fitting.straightness_test = Some(pcaline_fitting::StraightnessTest::standard());
+        c.fitting.kink_test = Some(pcaline_fitting::KinkTest::standard());
         c
     }
 

@@ -387,7 +387,7 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 16] = [
+    const OPTIONAL: [&str; 17] = [
         "map.lifecycle",
         "aiding.estimator.window",
         "aiding.estimator.tentative_variance_scale",
@@ -400,6 +400,7 @@ fn optional_field(path: &str) -> bool {
         "detector.fitting.residual_test",
         "detector.fitting.orientation_test",
         "detector.fitting.straightness_test",
+        "detector.fitting.kink_test",
         "map.max_offset_m",
         "map.max_new_alpha_std_rad",
         "map.merge_gate",

@@ -4,8 +4,8 @@
 //! collinear pieces (eq. 7), and the final tests of each line.
 
 use crate::{
-    FitConfig, Moments, Piece, Straightness, is_elongated, line_from_eigen, merge_adjacent,
-    refine_boundaries, straightness,
+    FitConfig, KinkTest, Moments, Piece, RunSums, Straightness, best_split, is_elongated,
+    line_from_eigen, merge_adjacent, refine_boundaries, straightness,
 };
 use pcaline_geometry::{LineSegment, RangeNoise, ScanPoints};
 use std::ops::Range;
@@ -50,6 +50,10 @@ pub struct LineFits {
     /// The lines, in scan order.
     pub lines: Vec<DetectedLine>,
     pieces: Vec<Piece>,
+    /// Lines still to be tested for a kink: first and last point, moments.
+    pending: Vec<(usize, usize, Moments)>,
+    /// Scratch of [`best_split`].
+    suffix: Vec<RunSums>,
 }
 
 /// Fits the lines of one segmented scan.
@@ -63,7 +67,9 @@ pub struct LineFits {
 /// elongation test (eq. 5) and the residual test is fitted by PCA; adjacent
 /// pieces of one cluster merge under [`FitConfig::merge`] (eq. 7), across
 /// the seam when `ring_without_break` (a closed scan read as one cluster);
-/// each merged line is kept when it has enough points and length, passes
+/// with [`FitConfig::kink_test`], a line whose points two lines fit
+/// significantly better is cut in two ([`best_split`]), again for each
+/// part; each line is kept when it has enough points and length, passes
 /// the orientation test, and, when configured, the straightness test
 /// against `noise` (the UTM-30LX-EW datasheet's when `None`).
 ///
@@ -132,39 +138,91 @@ pub fn fit_lines(
 
     out.lines.clear();
     let reference_noise = noise.copied().unwrap_or(RangeNoise::utm30lx());
-    for piece in &out.pieces {
-        let (first, last) = (xy[piece.first], xy[piece.last]);
-        // One eigen decomposition serves the fit and the orientation test.
-        let eigen = piece.moments.eigen();
-        let Some(line) = line_from_eigen(&piece.moments, &eigen, &first, &last) else { continue };
-        if line.n_points() < config.min_line_points
-            || line.length() < config.min_line_length_m
-            || config.orientation_test.is_some_and(|t| !t.accepts(&piece.moments, &eigen))
-        {
-            continue;
+    for i in 0..out.pieces.len() {
+        let piece = out.pieces[i];
+        out.pending.clear();
+        out.pending.push((piece.first, piece.last, piece.moments));
+        while let Some((first, last, moments)) = out.pending.pop() {
+            let Some(line) = measured_line(points, first, last, moments, &reference_noise) else {
+                continue;
+            };
+            if let Some(k) =
+                config.kink_test.filter(|t| line.straightness.runs_z < t.max_runs_z).and_then(|t| {
+                    kink_cut(&line, xy, config.min_points, &reference_noise, &t, &mut out.suffix)
+                })
+            {
+                // Right part first onto the stack, so the left one is
+                // finished first and the lines stay in scan order.
+                out.pending.push((k, last, Moments::from_points(&xy[k..=last])));
+                out.pending.push((first, k - 1, Moments::from_points(&xy[first..k])));
+                continue;
+            }
+            if passes_final_tests(&line, config, &reference_noise) {
+                out.lines.push(line);
+            }
         }
-        // The line's points in scan order, wrapping past the end of a
-        // closed scan.
-        let straightness = if piece.last >= piece.first {
-            straightness(&xy[piece.first..=piece.last], &line, &reference_noise)
-        } else {
-            let wrapped = xy[piece.first..].iter().chain(&xy[..=piece.last]);
-            straightness(wrapped, &line, &reference_noise)
-        };
-        let sigma = reference_noise.sigma_at(line.centroid().coords.norm());
-        if config.straightness_test.is_some_and(|t| !t.accepts(&straightness, sigma)) {
-            continue;
-        }
-        out.lines.push(DetectedLine {
-            line,
-            moments: piece.moments,
-            first_point: piece.first,
-            last_point: piece.last,
-            first_beam: points.beam[piece.first],
-            last_beam: points.beam[piece.last],
-            straightness,
-        });
     }
+}
+
+/// The line through points `first..=last` (wrapping past the end of a
+/// closed scan when `last < first`) with `moments`, and its straightness
+/// against `noise`; `None` for degenerate moments.
+fn measured_line(
+    points: &ScanPoints,
+    first_point: usize,
+    last_point: usize,
+    moments: Moments,
+    noise: &RangeNoise,
+) -> Option<DetectedLine> {
+    let xy = &points.xy;
+    let eigen = moments.eigen();
+    let line = line_from_eigen(&moments, &eigen, &xy[first_point], &xy[last_point])?;
+    let straightness = if last_point >= first_point {
+        straightness(&xy[first_point..=last_point], &line, noise)
+    } else {
+        let wrapped = xy[first_point..].iter().chain(&xy[..=last_point]);
+        straightness(wrapped, &line, noise)
+    };
+    Some(DetectedLine {
+        line,
+        moments,
+        first_point,
+        last_point,
+        first_beam: points.beam[first_point],
+        last_beam: points.beam[last_point],
+        straightness,
+    })
+}
+
+/// Where to cut `line` in two under `test` (the index of the first point
+/// of the right part), when its moments hold every point between its ends
+/// (no rejected piece inside, not across the seam of a closed scan).
+fn kink_cut(
+    line: &DetectedLine,
+    xy: &[pcaline_geometry::Point2<f64>],
+    min_points: usize,
+    noise: &RangeNoise,
+    test: &KinkTest,
+    suffix: &mut Vec<RunSums>,
+) -> Option<usize> {
+    let (first, last) = (line.first_point, line.last_point);
+    if last < first || line.moments.n != last - first + 1 {
+        return None;
+    }
+    let sigma = noise.sigma_at(line.line.centroid().coords.norm());
+    let (k, chi2) = best_split(&xy[first..=last], min_points, sigma, suffix)?;
+    (chi2 > test.min_chi2).then_some(first + k)
+}
+
+/// The final tests of a line: enough points and length, the orientation
+/// test and, when configured, the straightness test against `noise`.
+fn passes_final_tests(line: &DetectedLine, config: &FitConfig, noise: &RangeNoise) -> bool {
+    let l = &line.line;
+    let sigma = noise.sigma_at(l.centroid().coords.norm());
+    l.n_points() >= config.min_line_points
+        && l.length() >= config.min_line_length_m
+        && config.orientation_test.is_none_or(|t| t.accepts(&line.moments, &line.moments.eigen()))
+        && config.straightness_test.is_none_or(|t| t.accepts(&line.straightness, sigma))
 }
 
 #[cfg(test)]
@@ -172,7 +230,7 @@ pub fn fit_lines(
 #[allow(clippy::single_range_in_vec_init)]
 mod tests {
     use super::*;
-    use pcaline_geometry::{BearingTable, Scan};
+    use pcaline_geometry::{BearingTable, Point2, Scan};
 
     fn points_of(ranges: Vec<f32>) -> ScanPoints {
         let scan = Scan::new(-0.5, 0.01, 0.1, 30.0, ranges);
@@ -191,6 +249,35 @@ mod tests {
         let l = &fits.lines[0];
         assert_eq!((l.first_point, l.last_point, l.first_beam, l.last_beam), (0, 100, 0, 100));
         assert_eq!(l.point_indices(101).count(), 101);
+    }
+
+    /// A wall's front face (x = 2) and its 10 cm end face, as one piece:
+    /// the kink test cuts the end face off, which is then too short to be
+    /// a line, and the wall comes out exact; without it the line is tilted.
+    #[test]
+    fn a_wall_and_its_end_face_are_cut_apart_by_the_kink_test() {
+        let mut points = ScanPoints::default();
+        let front = (0..40).map(|k| Point2::new(2.0, -3.0 + 0.0625 * k as f64));
+        let cap = (0..12).map(|j| Point2::new(2.0 + 0.1 * j as f64 / 11.0, -0.5));
+        for (i, p) in front.chain(cap).enumerate() {
+            points.xy.push(p);
+            points.range_m.push(p.coords.norm());
+            points.angle_rad.push(p.y.atan2(p.x));
+            points.beam.push(i as u32);
+        }
+        let n = points.len();
+        let mut fits = LineFits::default();
+        let mut config = FitConfig::default();
+        fit_lines(&points, &[0..n], &mut [0..n], false, &config, None, &mut fits);
+        assert_eq!(fits.lines.len(), 1);
+        assert!(fits.lines[0].line.alpha().abs() > 0.5f64.to_radians(), "{:?}", fits.lines[0].line);
+        config.kink_test = Some(KinkTest::standard());
+        // Noise-free points have runs of one sign wherever they bend.
+        fit_lines(&points, &[0..n], &mut [0..n], false, &config, None, &mut fits);
+        assert_eq!(fits.lines.len(), 1, "{:#?}", fits.lines);
+        let l = &fits.lines[0];
+        assert!(l.line.alpha().abs() < 1e-9 && (l.line.d() - 2.0).abs() < 1e-9, "{:?}", l.line);
+        assert_eq!((l.first_point, l.last_point, l.moments.n), (0, 39, 40));
     }
 
     #[test]

@@ -25,6 +25,7 @@ mod corners;
 mod eigen;
 mod elongation;
 mod fit_lines;
+mod kink;
 mod least_squares;
 mod merge;
 mod moments;
@@ -38,6 +39,7 @@ pub use corners::refine_boundaries;
 pub use eigen::SymmetricEigen2;
 pub use elongation::{elongation_ratio, is_elongated};
 pub use fit_lines::{DetectedLine, LineFits, fit_lines};
+pub use kink::{KinkTest, RunSums, best_split};
 pub use least_squares::{fit_least_squares, slope_intercept_from_moments, vertical_rms_error};
 pub use merge::{MergeRule, Piece, merge_adjacent};
 pub use moments::Moments;
@@ -88,6 +90,11 @@ pub struct FitConfig {
     /// `None`: every line is reported with its [`Straightness`].
     #[cfg_attr(feature = "serde", serde(default))]
     pub straightness_test: Option<StraightnessTest>,
+    /// Lines whose points two lines fit significantly better than one (a
+    /// wall and its end face, a corner the split missed) are cut in two
+    /// ([`KinkTest`], [`best_split`]); `None`: no such cut (paper).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub kink_test: Option<KinkTest>,
 }
 
 impl FitConfig {
@@ -115,6 +122,7 @@ impl FitConfig {
             min_line_length_m: 0.0,
             orientation_test: None,
             straightness_test: None,
+            kink_test: None,
         }
     }
 
@@ -143,6 +151,7 @@ impl FitConfig {
             min_line_length_m: 0.3,
             orientation_test: Some(OrientationTest { max_std_rad: 2f64.to_radians(), noise }),
             straightness_test: None,
+            kink_test: None,
         }
     }
 
@@ -208,6 +217,9 @@ impl FitConfig {
                 "must be > 0",
             )?;
             t.noise.validate("fitting.orientation_test.noise")?;
+        }
+        if let Some(t) = self.kink_test {
+            ConfigError::positive("fitting.kink_test.min_chi2", t.min_chi2)?;
         }
         if let Some(t) = self.straightness_test {
             ConfigError::non_negative(
