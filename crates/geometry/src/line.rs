@@ -327,4 +327,42 @@ mod tests {
         }
         assert!(w.d >= 0.0);
     }
+
+    #[test]
+    fn restored_and_rebuilt_lines_keep_the_invariants() {
+        let l = LineSegment::through(
+            Point2::new(2.0, 1.0),
+            Vector2::new(0.3, 1.0),
+            Point2::new(1.0, -2.0),
+            Point2::new(3.0, 4.0),
+        );
+        // A saved line reads back as it was.
+        let back = LineSegment::from_hessian(l.alpha(), l.d(), l.centroid(), l.start(), l.end());
+        assert_eq!(
+            (back.alpha(), back.d(), back.start(), back.end()),
+            (l.alpha(), l.d(), l.start(), l.end())
+        );
+        assert!((back.direction() - l.direction()).norm() < 1e-12);
+        // A negative distance turns the normal half a turn; alpha is wrapped.
+        let flipped = LineSegment::from_hessian(
+            l.alpha() + PI + 4.0 * PI,
+            -l.d(),
+            l.centroid(),
+            l.start(),
+            l.end(),
+        );
+        assert!((flipped.alpha() - l.alpha()).abs() < 1e-12 && flipped.d() == l.d());
+        // Endpoints along the line, in either order, keep start -> end along
+        // the direction.
+        let e = l.with_extent(1.0, -0.5);
+        assert!((e.start() - (l.centroid() - l.direction() * 0.5)).norm() < 1e-12);
+        assert!((e.end() - (l.centroid() + l.direction())).norm() < 1e-12);
+        assert!((e.end() - e.start()).dot(&e.direction()) > 0.0);
+        let s = e.with_statistics(12, 0.01, Matrix2::identity()).with_n_points(13);
+        assert_eq!(
+            (s.n_points(), s.residual_std(), s.covariance()),
+            (13, 0.01, Matrix2::identity())
+        );
+        assert_eq!((s.alpha(), s.d(), s.start(), s.end()), (e.alpha(), e.d(), e.start(), e.end()));
+    }
 }
