@@ -104,6 +104,9 @@ pub enum SensorKind {
     Rplidar,
 }
 
+/// Largest tilt amplitude of a scene file, degrees: the simulator's 1.2 rad.
+const MAX_TILT_DEG: f64 = 1.2 * 180.0 / std::f64::consts::PI;
+
 /// Sway of the scan plane, in degrees.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -248,6 +251,18 @@ impl Scene {
                 "walls",
                 format!("{length:.0} m of walls, more than {MAX_SCENE_WALL_LENGTH_M:e} m"),
             ));
+        }
+        // The file's tilt is in degrees: checked here, so the error names
+        // the key the file writes (the model's check is in radians).
+        if let Some(t) = &self.sensor.tilt {
+            for (item, a) in [
+                ("sensor.tilt.roll_amplitude_deg", t.roll_amplitude_deg),
+                ("sensor.tilt.pitch_amplitude_deg", t.pitch_amplitude_deg),
+            ] {
+                if !(a.abs() < MAX_TILT_DEG) {
+                    return Err(err(item, format!("must be below {MAX_TILT_DEG:.1}°, is {a}")));
+                }
+            }
         }
         self.sensor_model().validate().map_err(|e| err("sensor", e.to_string()))?;
         self.odometry_model().validate().map_err(|e| err("odometry", e.to_string()))?;
@@ -579,6 +594,19 @@ mod tests {
         s.trajectory.waypoints.push([8.5, 8.5]);
         let e = s.validate().unwrap_err();
         assert!(e.message.contains("inside obstacles[0]"), "{e}");
+    }
+
+    #[test]
+    fn a_tilt_too_large_names_the_key_in_degrees() {
+        let mut s = square_scene();
+        s.sensor.tilt =
+            Some(TiltSpec { roll_amplitude_deg: 3.0, pitch_amplitude_deg: 80.0, period_s: 2.0 });
+        let e = s.validate().unwrap_err();
+        assert_eq!(e.item, "sensor.tilt.pitch_amplitude_deg", "{e}");
+        assert!(e.message.contains("68.8°, is 80"), "{e}");
+        s.sensor.tilt =
+            Some(TiltSpec { roll_amplitude_deg: 3.0, pitch_amplitude_deg: 2.0, period_s: 2.0 });
+        assert_eq!(s.validate(), Ok(()));
     }
 
     #[test]

@@ -147,13 +147,13 @@ impl SensorModel {
         ConfigError::check(self.beams >= 1, "sensor.beams", self.beams as f64, "must be >= 1")?;
         ConfigError::check(
             self.angle_increment_rad.is_finite() && self.angle_increment_rad != 0.0,
-            "sensor.angle_increment",
+            "sensor.angle_increment_rad",
             self.angle_increment_rad,
             "must be finite and non-zero",
         )?;
         ConfigError::check(
             self.angle_min_rad.is_finite(),
-            "sensor.angle_min",
+            "sensor.angle_min_rad",
             self.angle_min_rad,
             "must be finite",
         )?;
@@ -188,8 +188,8 @@ impl SensorModel {
         if let Some(t) = self.tilt {
             ConfigError::positive("sensor.tilt.period_s", t.period_s)?;
             for (field, a) in [
-                ("sensor.tilt.roll_amplitude", t.roll_amplitude_rad),
-                ("sensor.tilt.pitch_amplitude", t.pitch_amplitude_rad),
+                ("sensor.tilt.roll_amplitude_rad", t.roll_amplitude_rad),
+                ("sensor.tilt.pitch_amplitude_rad", t.pitch_amplitude_rad),
             ] {
                 ConfigError::check(a.abs() < 1.2, field, a, "must be below 1.2 rad")?;
             }
