@@ -259,7 +259,7 @@ impl Scene {
                 ("sensor.tilt.roll_amplitude_deg", t.roll_amplitude_deg),
                 ("sensor.tilt.pitch_amplitude_deg", t.pitch_amplitude_deg),
             ] {
-                if !(a.abs() < MAX_TILT_DEG) {
+                if a.is_nan() || a.abs() >= MAX_TILT_DEG {
                     return Err(err(item, format!("must be below {MAX_TILT_DEG:.1}°, is {a}")));
                 }
             }
