@@ -7,7 +7,7 @@ use crate::{
     FitConfig, KinkTest, Moments, Piece, RunSums, Straightness, best_split, is_elongated,
     line_from_eigen, merge_adjacent, refine_boundaries, straightness,
 };
-use pcaline_geometry::{LineSegment, RangeNoise, ScanPoints};
+use pcaline_geometry::{LineSegment, Point2, RangeNoise, ScanPoints};
 use std::ops::Range;
 
 /// A fitted line and the points it was fitted from.
@@ -143,86 +143,104 @@ pub fn fit_lines(
         out.pending.clear();
         out.pending.push((piece.first, piece.last, piece.moments));
         while let Some((first, last, moments)) = out.pending.pop() {
-            let Some(line) = measured_line(points, first, last, moments, &reference_noise) else {
+            // One eigen decomposition serves the fit and the orientation test.
+            let eigen = moments.eigen();
+            let Some(line) = line_from_eigen(&moments, &eigen, &xy[first], &xy[last]) else {
                 continue;
             };
-            if let Some(k) =
-                config.kink_test.filter(|t| line.straightness.runs_z < t.max_runs_z).and_then(|t| {
-                    kink_cut(&line, xy, config.min_points, &reference_noise, &t, &mut out.suffix)
-                })
+            // The straightness pass is made once: before the kink test
+            // when there is one (its screen), else only for lines that
+            // pass the cheaper tests.
+            let mut measured = None;
+            if let Some(test) = &config.kink_test {
+                let s = straightness_over(xy, first, last, &line, &reference_noise);
+                measured = Some(s);
+                let cut = (s.runs_z < test.max_runs_z)
+                    .then(|| {
+                        kink_cut(
+                            first,
+                            last,
+                            &moments,
+                            &line,
+                            xy,
+                            config,
+                            &reference_noise,
+                            test,
+                            &mut out.suffix,
+                        )
+                    })
+                    .flatten();
+                if let Some(k) = cut {
+                    // Right part first onto the stack, so the left one is
+                    // finished first and the lines stay in scan order.
+                    out.pending.push((k, last, Moments::from_points(&xy[k..=last])));
+                    out.pending.push((first, k - 1, Moments::from_points(&xy[first..k])));
+                    continue;
+                }
+            }
+            if line.n_points() < config.min_line_points
+                || line.length() < config.min_line_length_m
+                || config.orientation_test.is_some_and(|t| !t.accepts(&moments, &eigen))
             {
-                // Right part first onto the stack, so the left one is
-                // finished first and the lines stay in scan order.
-                out.pending.push((k, last, Moments::from_points(&xy[k..=last])));
-                out.pending.push((first, k - 1, Moments::from_points(&xy[first..k])));
                 continue;
             }
-            if passes_final_tests(&line, config, &reference_noise) {
-                out.lines.push(line);
+            let straightness = measured
+                .unwrap_or_else(|| straightness_over(xy, first, last, &line, &reference_noise));
+            let sigma = reference_noise.sigma_at(line.centroid().coords.norm());
+            if config.straightness_test.is_some_and(|t| !t.accepts(&straightness, sigma)) {
+                continue;
             }
+            out.lines.push(DetectedLine {
+                line,
+                moments,
+                first_point: first,
+                last_point: last,
+                first_beam: points.beam[first],
+                last_beam: points.beam[last],
+                straightness,
+            });
         }
     }
 }
 
-/// The line through points `first..=last` (wrapping past the end of a
-/// closed scan when `last < first`) with `moments`, and its straightness
-/// against `noise`; `None` for degenerate moments.
-fn measured_line(
-    points: &ScanPoints,
-    first_point: usize,
-    last_point: usize,
-    moments: Moments,
+/// The straightness of `line` over points `first..=last` of `xy`, in scan
+/// order (wrapping past the end of a closed scan when `last < first`).
+fn straightness_over(
+    xy: &[Point2<f64>],
+    first: usize,
+    last: usize,
+    line: &LineSegment,
     noise: &RangeNoise,
-) -> Option<DetectedLine> {
-    let xy = &points.xy;
-    let eigen = moments.eigen();
-    let line = line_from_eigen(&moments, &eigen, &xy[first_point], &xy[last_point])?;
-    let straightness = if last_point >= first_point {
-        straightness(&xy[first_point..=last_point], &line, noise)
+) -> Straightness {
+    if last >= first {
+        straightness(&xy[first..=last], line, noise)
     } else {
-        let wrapped = xy[first_point..].iter().chain(&xy[..=last_point]);
-        straightness(wrapped, &line, noise)
-    };
-    Some(DetectedLine {
-        line,
-        moments,
-        first_point,
-        last_point,
-        first_beam: points.beam[first_point],
-        last_beam: points.beam[last_point],
-        straightness,
-    })
+        straightness(xy[first..].iter().chain(&xy[..=last]), line, noise)
+    }
 }
 
-/// Where to cut `line` in two under `test` (the index of the first point
-/// of the right part), when its moments hold every point between its ends
-/// (no rejected piece inside, not across the seam of a closed scan).
+/// Where to cut the line through points `first..=last` with `moments` in
+/// two under `test` (the index of the first point of the right part), when
+/// the moments hold every point between its ends (no rejected piece inside,
+/// not across the seam of a closed scan).
+#[allow(clippy::too_many_arguments)]
 fn kink_cut(
-    line: &DetectedLine,
-    xy: &[pcaline_geometry::Point2<f64>],
-    min_points: usize,
+    first: usize,
+    last: usize,
+    moments: &Moments,
+    line: &LineSegment,
+    xy: &[Point2<f64>],
+    config: &FitConfig,
     noise: &RangeNoise,
     test: &KinkTest,
     suffix: &mut Vec<RunSums>,
 ) -> Option<usize> {
-    let (first, last) = (line.first_point, line.last_point);
-    if last < first || line.moments.n != last - first + 1 {
+    if last < first || moments.n != last - first + 1 {
         return None;
     }
-    let sigma = noise.sigma_at(line.line.centroid().coords.norm());
-    let (k, chi2) = best_split(&xy[first..=last], min_points, sigma, suffix)?;
+    let sigma = noise.sigma_at(line.centroid().coords.norm());
+    let (k, chi2) = best_split(&xy[first..=last], config.min_points, sigma, suffix)?;
     (chi2 > test.min_chi2).then_some(first + k)
-}
-
-/// The final tests of a line: enough points and length, the orientation
-/// test and, when configured, the straightness test against `noise`.
-fn passes_final_tests(line: &DetectedLine, config: &FitConfig, noise: &RangeNoise) -> bool {
-    let l = &line.line;
-    let sigma = noise.sigma_at(l.centroid().coords.norm());
-    l.n_points() >= config.min_line_points
-        && l.length() >= config.min_line_length_m
-        && config.orientation_test.is_none_or(|t| t.accepts(&line.moments, &line.moments.eigen()))
-        && config.straightness_test.is_none_or(|t| t.accepts(&line.straightness, sigma))
 }
 
 #[cfg(test)]
@@ -230,7 +248,7 @@ fn passes_final_tests(line: &DetectedLine, config: &FitConfig, noise: &RangeNois
 #[allow(clippy::single_range_in_vec_init)]
 mod tests {
     use super::*;
-    use pcaline_geometry::{BearingTable, Point2, Scan};
+    use pcaline_geometry::{BearingTable, Scan};
 
     fn points_of(ranges: Vec<f32>) -> ScanPoints {
         let scan = Scan::new(-0.5, 0.01, 0.1, 30.0, ranges);
