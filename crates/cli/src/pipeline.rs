@@ -21,6 +21,12 @@ use std::sync::mpsc;
 /// few enough that memory does not grow with the log.
 pub const BATCH_SCANS: usize = 256;
 
+/// Batches handed to the pool and not yet taken by the caller, at most.
+const IN_FLIGHT: usize = 4;
+
+/// A batch the pool works on: its scans and their results, when done.
+type Batch<T> = mpsc::Receiver<(Vec<ScanRecord>, Vec<T>)>;
+
 /// Runs `work` over the scans of `file` in batches on the thread pool and
 /// `consume` on each scan and its result in log order, on this thread.
 /// `work(first, scans)` gets a batch whose first scan is scan `first` of the
@@ -33,7 +39,9 @@ pub fn for_each_scan<T: Send>(
     mut consume: impl FnMut(ScanRecord, T) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
     let (raw_out, raw_in) = mpsc::sync_channel::<Vec<ScanRecord>>(2);
-    let (done_out, done_in) = mpsc::sync_channel::<(Vec<ScanRecord>, Vec<T>)>(2);
+    // One receiver per batch, in log order; each batch's result arrives on
+    // its own once the pool has worked on it.
+    let (pending_out, pending_in) = mpsc::sync_channel::<Batch<T>>(IN_FLIGHT);
     std::thread::scope(|scope| {
         // Each stage stops at the first send that finds the next one gone.
         let reader = scope.spawn(move || {
@@ -56,17 +64,33 @@ pub fn for_each_scan<T: Send>(
             read
         });
         let work = &work;
+        // Batches are handed to the pool as they are read, up to
+        // `IN_FLIGHT` ahead of the caller: the pool does not wait for one
+        // batch's last scans before starting the next. The scope's body runs
+        // on this thread (`in_place_scope`), not on a pool thread, so its
+        // blocking receives and sends never take a worker from the pool
+        // (with one thread, that was a deadlock).
         scope.spawn(move || {
-            let mut first = 0;
-            for batch in raw_in {
-                let results = work(first, &batch);
-                first += batch.len();
-                if done_out.send((batch, results)).is_err() {
-                    break;
+            rayon::in_place_scope(|pool| {
+                let mut first = 0;
+                for batch in raw_in {
+                    let (done_out, done_in) = mpsc::sync_channel(1);
+                    if pending_out.send(done_in).is_err() {
+                        break;
+                    }
+                    let start = first;
+                    first += batch.len();
+                    pool.spawn(move |_| {
+                        let results = work(start, &batch);
+                        // The caller may have stopped: nothing to hand over.
+                        let _ = done_out.send((batch, results));
+                    });
                 }
-            }
+            });
         });
-        'batches: for (batch, results) in done_in {
+        'batches: for done in pending_in {
+            // A task that panicked drops its sender: the scope re-raises it.
+            let Ok((batch, results)) = done.recv() else { break };
             for (scan, result) in batch.into_iter().zip(results) {
                 if consume(scan, result).is_break() {
                     break 'batches;
