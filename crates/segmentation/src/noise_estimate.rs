@@ -213,16 +213,35 @@ pub fn estimate_range_noise(
     scratch: &mut NoiseScratch,
 ) -> NoiseEstimate {
     let quantisation = range_step_m.max(0.0) / 12f64.sqrt();
+    // Each band's sigma is the same for every estimate up to this: its
+    // lowest allowed value, or, when that is the nominal, the nominal's
+    // `consistent_scale` (module docs).
+    let steady = [nominal.near_sigma_m, nominal.far_sigma_m].map(|band| {
+        let base = band.hypot(quantisation);
+        let lo = (band * estimation.min_scale).hypot(quantisation);
+        if lo >= base { estimation.consistent_scale.max(1.0) * base } else { lo }
+    });
     // Consecutive beams first; every other beam replaces them in a band
     // where they give a clearly smaller sigma (interlaced sweeps).
     let mut samples = [0usize; 2];
     let mut estimates = [None::<f64>; 2];
     for gap in [1, 2] {
+        // A smaller estimate cannot move a band at or below its steady
+        // value, and a band the consecutive beams could not estimate keeps
+        // the nominal: the second pass runs only when a sigma could move.
+        if gap == 2 && !estimates.iter().zip(steady).any(|(e, s)| e.is_some_and(|e| e > s)) {
+            break;
+        }
         let (near, far) = (&mut scratch.near, &mut scratch.far);
         collect_triples(points, nominal.far_from_m, gap, near, far);
         for (k, residuals) in [near, far].into_iter().enumerate() {
             let Some(e) = band_sigma(residuals, estimation.min_samples) else { continue };
-            if estimates[k].is_none_or(|consecutive| consecutive > INTERLACE_RATIO * e) {
+            // Only a band the consecutive beams estimated is compared.
+            let replace = match estimates[k] {
+                None => gap == 1,
+                Some(consecutive) => consecutive > INTERLACE_RATIO * e,
+            };
+            if replace {
                 (estimates[k], samples[k]) = (Some(e), residuals.len());
             }
         }
