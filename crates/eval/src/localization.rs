@@ -47,8 +47,13 @@ pub struct RunStep<'a> {
 impl RunStep<'_> {
     /// The loop with loop closure, when there is one.
     pub fn loop_closing(&self) -> Option<&LoopClosing> {
-        self.loops.iter().find_map(Localizer::loop_closing)
+        loop_closing_of(self.loops)
     }
+}
+
+/// The first of `loops` that closes loops.
+fn loop_closing_of(loops: &[Localizer]) -> Option<&LoopClosing> {
+    loops.iter().find_map(Localizer::loop_closing)
 }
 
 /// Why [`AidedRun::run_observed`] failed.
@@ -153,7 +158,7 @@ impl AidedRun {
 
     /// The loop with loop closure, when there is one.
     pub fn loop_closing(&self) -> Option<&LoopClosing> {
-        self.loops.iter().find_map(Localizer::loop_closing)
+        loop_closing_of(&self.loops)
     }
 
     /// Each loop's errors against `truth` (the run's true poses) and its map's

@@ -4,7 +4,7 @@
 
 use crate::fast_hash::FastMap;
 use crate::grid::Grid;
-use crate::metrics::line_distance_from;
+use crate::metrics::{centroid_distance, normal_offset};
 use crate::{LineDistance, LineStatus, MapConfig, MergeGate};
 use pcaline_fitting::{Moments, line_from_moments};
 use pcaline_geometry::{ConfigError, LineSegment, Point2, Pose2, Vector2, line_angle_diff};
@@ -411,21 +411,17 @@ impl LineMap {
             let index = id as usize;
             let m = &self.lines[index];
             // The angle first: it rejects most candidates without a sine.
-            if line_angle_diff(m.line.alpha(), line.alpha()).abs() >= gate.max_d_alpha_rad {
+            let d_alpha = line_angle_diff(m.line.alpha(), line.alpha());
+            if d_alpha.abs() >= gate.max_d_alpha_rad {
                 return;
             }
-            let normal = m.line.normal();
-            let distance = line_distance_from(&m.line, &normal, line, self.config.centroid_term);
-            let offset_ok = gate
-                .max_offset_m
-                .is_none_or(|max| (normal.dot(&line.centroid().coords) - m.line.d()).abs() < max);
-            let side_ok = !self.config.sided || same_side(m, viewpoint);
-            if distance.d_alpha.abs() < gate.max_d_alpha_rad
-                && distance.d_rho < gate.max_d_rho_m
-                && offset_ok
-                && side_ok
-            {
-                f(index, distance);
+            let d_d = normal_offset(&m.line, &m.line.normal(), line);
+            if gate.max_offset_m.is_some_and(|max| d_d >= max) {
+                return;
+            }
+            let d_rho = d_d + centroid_distance(&m.line, line, self.config.centroid_term);
+            if d_rho < gate.max_d_rho_m && (!self.config.sided || same_side(m, viewpoint)) {
+                f(index, LineDistance { d_alpha, d_rho });
             }
         });
     }

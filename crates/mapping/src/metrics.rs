@@ -46,24 +46,28 @@ pub struct LineDistance {
 /// assert!((m.d_rho - (0.1 + (0.1f64.powi(2) + 3.5f64.powi(2)).sqrt())).abs() < 1e-12);
 /// ```
 pub fn line_distance(map: &LineSegment, new: &LineSegment, term: CentroidTerm) -> LineDistance {
-    line_distance_from(map, &map.normal(), new, term)
+    let d_alpha = line_angle_diff(map.alpha(), new.alpha());
+    let d_d = normal_offset(map, &map.normal(), new);
+    LineDistance { d_alpha, d_rho: d_d + centroid_distance(map, new, term) }
 }
 
-/// [`line_distance`] with the map line's unit normal already computed
-/// (`map_normal = map.normal()`), for callers that need it too.
-pub(crate) fn line_distance_from(
+/// `d_d` of [`line_distance`]: `|n_map . C_new - d_map|`, with the map line's
+/// unit normal `map_normal` already computed.
+pub(crate) fn normal_offset(
     map: &LineSegment,
     map_normal: &Vector2<f64>,
     new: &LineSegment,
-    term: CentroidTerm,
-) -> LineDistance {
-    let d_alpha = line_angle_diff(map.alpha(), new.alpha());
-    let d_d = (map_normal.dot(&new.centroid().coords) - map.d()).abs();
-    let d_c = match term {
+) -> f64 {
+    (map_normal.dot(&new.centroid().coords) - map.d()).abs()
+}
+
+/// `d_c` of [`line_distance`]: the centroids' distance, or the new
+/// centroid's gap to the map segment, by `term`.
+pub(crate) fn centroid_distance(map: &LineSegment, new: &LineSegment, term: CentroidTerm) -> f64 {
+    match term {
         CentroidTerm::Centroid => (map.centroid() - new.centroid()).norm(),
         CentroidTerm::SegmentGap => segment_gap(map, &new.centroid()),
-    };
-    LineDistance { d_alpha, d_rho: d_d + d_c }
+    }
 }
 
 /// Distance along the line from `p`'s projection to the segment (0 inside it).
