@@ -415,7 +415,7 @@ impl LineMap {
             if d_alpha.abs() >= gate.max_d_alpha_rad {
                 return;
             }
-            let d_d = normal_offset(&m.line, &m.line.normal(), line);
+            let d_d = normal_offset(&m.line, line);
             if gate.max_offset_m.is_some_and(|max| d_d >= max) {
                 return;
             }

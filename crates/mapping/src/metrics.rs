@@ -1,7 +1,7 @@
 //! The matching metrics of the paper's section 2.1: the orientation difference
 //! `d_alpha` and the distance `d_rho = d_d + d_C` (eq. 8-10), in Hessian form.
 
-use pcaline_geometry::{LineSegment, Point2, Vector2, line_angle_diff};
+use pcaline_geometry::{LineSegment, Point2, line_angle_diff};
 
 /// Which centroid term `d_C` enters `d_rho`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,18 +47,13 @@ pub struct LineDistance {
 /// ```
 pub fn line_distance(map: &LineSegment, new: &LineSegment, term: CentroidTerm) -> LineDistance {
     let d_alpha = line_angle_diff(map.alpha(), new.alpha());
-    let d_d = normal_offset(map, &map.normal(), new);
+    let d_d = normal_offset(map, new);
     LineDistance { d_alpha, d_rho: d_d + centroid_distance(map, new, term) }
 }
 
-/// `d_d` of [`line_distance`]: `|n_map . C_new - d_map|`, with the map line's
-/// unit normal `map_normal` already computed.
-pub(crate) fn normal_offset(
-    map: &LineSegment,
-    map_normal: &Vector2<f64>,
-    new: &LineSegment,
-) -> f64 {
-    (map_normal.dot(&new.centroid().coords) - map.d()).abs()
+/// `d_d` of [`line_distance`]: `|n_map . C_new - d_map|`.
+pub(crate) fn normal_offset(map: &LineSegment, new: &LineSegment) -> f64 {
+    (map.normal().dot(&new.centroid().coords) - map.d()).abs()
 }
 
 /// `d_c` of [`line_distance`]: the centroids' distance, or the new

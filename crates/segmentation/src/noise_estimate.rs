@@ -13,9 +13,10 @@
 //!
 //! Triples are taken twice, of consecutive beams and of every other beam
 //! (`i - 2, i, i + 2`). For white noise both agree, and each band keeps the
-//! consecutive beams' sigma unless it exceeds the other by more than 25%. A scanner that interlaces sweeps (a SICK LMS
-//! at 0.5° takes even and odd beams on two turns of its mirror, so a moving
-//! vehicle offsets one set from the other) puts a sawtooth between
+//! consecutive beams' sigma unless it exceeds the other by more than 25%. A
+//! scanner that interlaces sweeps (a SICK LMS at 0.5° takes even and odd
+//! beams on two turns of its mirror, so a moving vehicle offsets one set
+//! from the other) puts a sawtooth between
 //! consecutive beams that is not range noise: on MIT CSAIL's log it raised
 //! the consecutive-beam estimate for 41% of the scans, up to 4 times the
 //! datasheet, while every other beam lies on one sweep. Wider triples
@@ -221,32 +222,26 @@ pub fn estimate_range_noise(
         let lo = (band * estimation.min_scale).hypot(quantisation);
         if lo >= base { estimation.consistent_scale.max(1.0) * base } else { lo }
     });
-    // Consecutive beams first; every other beam replaces them in a band
-    // where they give a clearly smaller sigma (interlaced sweeps).
-    let mut samples = [0usize; 2];
-    let mut estimates = [None::<f64>; 2];
-    for gap in [1, 2] {
-        // A smaller estimate cannot move a band at or below its steady
-        // value, and a band the consecutive beams could not estimate keeps
-        // the nominal: the second pass runs only when a sigma could move.
-        if gap == 2 && !estimates.iter().zip(steady).any(|(e, s)| e.is_some_and(|e| e > s)) {
-            break;
-        }
+    // Consecutive beams first.
+    let (near, far) = (&mut scratch.near, &mut scratch.far);
+    collect_triples(points, nominal.far_from_m, 1, near, far);
+    let mut samples = [near.len(), far.len()];
+    let mut estimates = [near, far].map(|r| band_sigma(r, estimation.min_samples));
+    // Every other beam replaces them in a band where it gives a clearly
+    // smaller sigma (interlaced sweeps). A smaller estimate cannot move a
+    // band at or below its steady value, and a band the consecutive beams
+    // could not estimate keeps the nominal: the second pass runs only when a
+    // sigma could move.
+    if estimates.iter().zip(steady).any(|(e, s)| e.is_some_and(|e| e > s)) {
         let (near, far) = (&mut scratch.near, &mut scratch.far);
-        collect_triples(points, nominal.far_from_m, gap, near, far);
+        collect_triples(points, nominal.far_from_m, 2, near, far);
         for (k, residuals) in [near, far].into_iter().enumerate() {
-            let Some(e) = band_sigma(residuals, estimation.min_samples) else { continue };
-            // Only a band the consecutive beams estimated is compared.
-            let replace = match estimates[k] {
-                None => gap == 1,
-                Some(consecutive) => consecutive > INTERLACE_RATIO * e,
-            };
-            if replace {
+            if let (Some(consecutive), Some(e)) =
+                (estimates[k], band_sigma(residuals, estimation.min_samples))
+                && consecutive > INTERLACE_RATIO * e
+            {
                 (estimates[k], samples[k]) = (Some(e), residuals.len());
             }
-        }
-        if gap == 1 {
-            samples = [scratch.near.len(), scratch.far.len()];
         }
     }
     let mut noise = *nominal;
