@@ -1,18 +1,18 @@
-//! The scans of a log on every core, in order: one thread reads and parses
-//! the log a batch at a time, a second hands each batch to the thread pool
-//! (`--threads`) for the work that is independent scan by scan, and the
-//! caller's thread takes the results in log order. The three overlap, and
-//! each stage holds at most two batches, so memory does not grow with the
-//! log.
+//! The scans of a log on every core, in order: one thread reads the log a
+//! chunk at a time ([`read_log_chunks`]: for a CARMEN log only its lines),
+//! a second hands each chunk to the thread pool (`--threads`), where it is
+//! parsed and worked on scan by scan, and the caller's thread takes the
+//! results in log order. The three overlap, and each stage holds at most a
+//! few chunks, so memory does not grow with the log.
 //!
 //! Invariants: the caller sees every scan in log order, once, with its
 //! result; the results do not depend on the number of threads when `work`
-//! computes each scan's result from that scan alone; a read error comes
-//! after every scan before it has been consumed, as in a sequential read;
-//! and when `consume` breaks, nothing after that scan is consumed and the
-//! other stages stop.
+//! computes each scan's result from that scan alone; an error (reading,
+//! parsing or checking a record) comes after every scan before it has been
+//! consumed, and is the error of a sequential read; and when `consume`
+//! breaks, nothing after that scan is consumed and the other stages stop.
 
-use pcaline_io::{IoError, LogOptions, LogRecord, ScanRecord, read_log};
+use pcaline_io::{IoError, LogChunk, LogOptions, LogRecord, ScanRecord, read_log_chunks};
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::sync::mpsc;
@@ -24,44 +24,34 @@ pub const BATCH_SCANS: usize = 256;
 /// Batches handed to the pool and not yet taken by the caller, at most.
 const IN_FLIGHT: usize = 4;
 
-/// A batch the pool works on: its scans and their results, when done.
-type Batch<T> = mpsc::Receiver<(Vec<ScanRecord>, Vec<T>)>;
+/// A batch the pool works on, when done: its scans, their results, and the
+/// error that ended its parse, if one did (the log ends there).
+type Done<T> = (Vec<ScanRecord>, Vec<T>, Option<IoError>);
 
 /// Runs `work` over the scans of `file` in batches on the thread pool and
 /// `consume` on each scan and its result in log order, on this thread.
 /// `work(first, scans)` gets a batch whose first scan is scan `first` of the
-/// log (from 0) and returns one result per scan. Returns the read's result:
-/// the number of records read, or the error that stopped it.
+/// log (from 0) and returns one result per scan. Returns the number of
+/// scans consumed, or the error that stopped the read.
 pub fn for_each_scan<T: Send>(
     file: &Path,
     options: &LogOptions,
     work: impl Fn(usize, &[ScanRecord]) -> Vec<T> + Sync,
     mut consume: impl FnMut(ScanRecord, T) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
-    let (raw_out, raw_in) = mpsc::sync_channel::<Vec<ScanRecord>>(2);
+    let (raw_out, raw_in) = mpsc::sync_channel::<LogChunk>(2);
     // One receiver per batch, in log order; each batch's result arrives on
     // its own once the pool has worked on it.
-    let (pending_out, pending_in) = mpsc::sync_channel::<Batch<T>>(IN_FLIGHT);
+    let (pending_out, pending_in) = mpsc::sync_channel::<mpsc::Receiver<Done<T>>>(IN_FLIGHT);
     std::thread::scope(|scope| {
         // Each stage stops at the first send that finds the next one gone.
         let reader = scope.spawn(move || {
-            let mut batch = Vec::with_capacity(BATCH_SCANS);
-            let read = read_log(file, options, |record| {
-                let LogRecord::Scan(s) = record else { return ControlFlow::Continue(()) };
-                batch.push(s);
-                if batch.len() == BATCH_SCANS
-                    && raw_out
-                        .send(std::mem::replace(&mut batch, Vec::with_capacity(BATCH_SCANS)))
-                        .is_err()
-                {
+            read_log_chunks(file, options, BATCH_SCANS, |chunk| {
+                if raw_out.send(chunk).is_err() {
                     return ControlFlow::Break(());
                 }
                 ControlFlow::Continue(())
-            });
-            if !batch.is_empty() {
-                let _ = raw_out.send(batch);
-            }
-            read
+            })
         });
         let work = &work;
         // Batches are handed to the pool as they are read, up to
@@ -73,38 +63,57 @@ pub fn for_each_scan<T: Send>(
         scope.spawn(move || {
             rayon::in_place_scope(|pool| {
                 let mut first = 0;
-                for batch in raw_in {
+                for chunk in raw_in {
                     let (done_out, done_in) = mpsc::sync_channel(1);
                     if pending_out.send(done_in).is_err() {
                         break;
                     }
                     let start = first;
-                    first += batch.len();
+                    first += chunk.scans();
                     pool.spawn(move |_| {
-                        let results = work(start, &batch);
+                        let mut scans = Vec::with_capacity(chunk.scans());
+                        let parsed = chunk.parse(file, options, |record| {
+                            if let LogRecord::Scan(s) = record {
+                                scans.push(s);
+                            }
+                            ControlFlow::Continue(())
+                        });
+                        let results = work(start, &scans);
                         // The caller may have stopped: nothing to hand over.
-                        let _ = done_out.send((batch, results));
+                        let _ = done_out.send((scans, results, parsed.err()));
                     });
                 }
             });
         });
+        let mut consumed = 0;
+        let mut failed = None;
         'batches: for done in pending_in {
             // A task that panicked drops its sender: the scope re-raises it.
-            let Ok((batch, results)) = done.recv() else { break };
+            let Ok((batch, results, error)) = done.recv() else { break };
             for (scan, result) in batch.into_iter().zip(results) {
+                consumed += 1;
                 if consume(scan, result).is_break() {
                     break 'batches;
                 }
             }
+            if error.is_some() {
+                failed = error;
+                break;
+            }
         }
         // Leaving the loop drops the receiver, which stops the other stages.
-        reader.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        let read = reader.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        match failed {
+            Some(e) => Err(e),
+            None => read.map(|()| consumed),
+        }
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pcaline_io::read_log;
 
     /// A CARMEN log of `scans` FLASER lines in the system's temporary
     /// folder (line `bad_at + 1` with a range that is not a number),
@@ -155,7 +164,8 @@ mod tests {
     }
 
     /// A bad line is reported after every scan before it was consumed, with
-    /// the line number a sequential read reports.
+    /// the line number a sequential read reports (it is parsed on the pool,
+    /// in the second batch).
     #[test]
     fn a_read_error_comes_after_the_scans_before_it() {
         let bad = BATCH_SCANS + 5;

@@ -37,6 +37,10 @@ impl Default for CarmenOptions {
     }
 }
 
+/// 10^k for k up to 15: all exact in an `f64`.
+const POWERS_OF_TEN: [f64; 16] =
+    [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15];
+
 /// A plain decimal of at most 15 digits (`-12.345`, `7`, `.5`), parsed
 /// exactly as `str::parse::<f64>` parses it; `None` for anything else
 /// (exponents, `inf`, `nan`, more digits), which the caller hands to
@@ -44,10 +48,8 @@ impl Default for CarmenOptions {
 /// times faster. Exact (Clinger's fast path): the digits as an integer
 /// below 2^53 and a power of ten up to 10^15 are both exact `f64`s, and
 /// IEEE division rounds their quotient correctly.
-fn short_decimal(s: &str) -> Option<f64> {
-    const POWERS: [f64; 16] =
-        [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15];
-    let (negative, digits) = match s.as_bytes() {
+fn short_decimal(s: &[u8]) -> Option<f64> {
+    let (negative, digits) = match s {
         [b'-', rest @ ..] => (true, rest),
         [b'+', rest @ ..] => (false, rest),
         rest => (false, rest),
@@ -56,7 +58,7 @@ fn short_decimal(s: &str) -> Option<f64> {
     for &b in digits {
         match b {
             b'0'..=b'9' => {
-                mantissa = mantissa * 10 + u64::from(b - b'0');
+                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(b - b'0'));
                 count += 1;
                 decimals += usize::from(point);
             }
@@ -67,8 +69,76 @@ fn short_decimal(s: &str) -> Option<f64> {
     if count == 0 || count > 15 {
         return None;
     }
-    let v = mantissa as f64 / POWERS[decimals];
+    let v = mantissa as f64 / POWERS_OF_TEN[decimals];
     Some(if negative { -v } else { v })
+}
+
+/// The whitespace-separated fields of a line, taken left to right without
+/// collecting them: the fast path of `FLASER` lines. Whitespace is what
+/// `str::split_ascii_whitespace` splits at, so the fields are the same.
+struct Fields<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Fields<'a> {
+    /// The next field, or `None` at the end of the line.
+    fn next_field(&mut self) -> Option<&'a [u8]> {
+        let b = self.bytes;
+        let mut i = self.at;
+        while i < b.len() && b[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        let start = i;
+        while i < b.len() && !b[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        self.at = i;
+        (i > start).then(|| &b[start..i])
+    }
+
+    /// The next field as a number, read as [`CarmenReader::num`] reads it;
+    /// `None` at the end of the line or when it is not a number. A plain
+    /// decimal is read as [`short_decimal`] reads it, in the same pass
+    /// that finds its end (this runs for every range of a log); anything
+    /// else goes to `str::parse`.
+    fn number(&mut self) -> Option<f64> {
+        let b = self.bytes;
+        let mut i = self.at;
+        while i < b.len() && b[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        let start = i;
+        let negative = b.get(i) == Some(&b'-');
+        if negative || b.get(i) == Some(&b'+') {
+            i += 1;
+        }
+        let (mut mantissa, mut digits, mut decimals) = (0u64, 0usize, 0usize);
+        let (mut point, mut plain) = (false, true);
+        while i < b.len() {
+            match b[i] {
+                c @ b'0'..=b'9' => {
+                    // Wraps only past 19 digits, which are not plain anyway.
+                    mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+                    digits += 1;
+                    decimals += usize::from(point);
+                }
+                b'.' if !point => point = true,
+                c if c.is_ascii_whitespace() => break,
+                _ => plain = false,
+            }
+            i += 1;
+        }
+        self.at = i;
+        if i == start {
+            return None;
+        }
+        if plain && (1..=15).contains(&digits) {
+            let v = mantissa as f64 / POWERS_OF_TEN[decimals];
+            return Some(if negative { -v } else { v });
+        }
+        std::str::from_utf8(&b[start..i]).ok()?.parse().ok()
+    }
 }
 
 /// The name of a pose's field in errors: `x`, or `odom_x` under `odom`.
@@ -110,11 +180,23 @@ impl<R: BufRead> CarmenReader<R> {
         CarmenReader { input, path: path.to_path_buf(), options, line_no: 0, buf: String::new() }
     }
 
+    /// The reader with its line numbers counted from `first_line` (1-based)
+    /// instead of 1: for input that starts within a log.
+    pub(crate) fn starting_at_line(mut self, first_line: usize) -> Self {
+        self.line_no = first_line.saturating_sub(1);
+        self
+    }
+
     fn err(&self, message: impl Into<String>) -> IoError {
         IoError::parse(&self.path, Some(self.line_no), message)
     }
 
     fn parse_line(&self, line: &str) -> Result<Option<LogRecord>, IoError> {
+        if let Some(rest) = line.strip_prefix("FLASER ")
+            && let Some(record) = self.flaser_fast(rest)
+        {
+            return Ok(Some(record));
+        }
         let mut fields = line.split_ascii_whitespace();
         let Some(kind) = fields.next() else { return Ok(None) };
         if kind.starts_with('#') {
@@ -133,7 +215,7 @@ impl<R: BufRead> CarmenReader<R> {
     /// an error: this runs for every range of a log).
     fn num(&self, fields: &[&str], i: usize, what: impl Display) -> Result<f64, IoError> {
         let s = fields.get(i).ok_or_else(|| self.err(format!("truncated line: no {what}")))?;
-        match short_decimal(s) {
+        match short_decimal(s.as_bytes()) {
             Some(v) => Ok(v),
             None => {
                 s.parse::<f64>().map_err(|_| self.err(format!("{what} is not a number: {s:?}")))
@@ -167,23 +249,51 @@ impl<R: BufRead> CarmenReader<R> {
 
     fn count(&self, fields: &[&str], i: usize, what: &str) -> Result<usize, IoError> {
         let v = self.num(fields, i, what)?;
-        if v < 0.0 || v.fract() != 0.0 || v > 1e6 {
+        if !is_count(v) {
             return Err(self.err(format!("{what} is not a count: {v}")));
         }
         Ok(v as usize)
     }
 
+    /// A range as the log writes it, metres: at or beyond the maximum (the
+    /// log's "no return") or NaN, +inf.
+    fn range(&self, r: f64) -> f32 {
+        if r >= self.options.max_range_m || r.is_nan() { f32::INFINITY } else { r as f32 }
+    }
+
     fn ranges(&self, fields: &[&str], start: usize, n: usize) -> Result<Vec<f32>, IoError> {
         (0..n)
             .map(|k| {
-                let r = self.num(fields, start + k, format_args!("range {}", k + 1))?;
-                Ok(if r >= self.options.max_range_m || r.is_nan() {
-                    f32::INFINITY
-                } else {
-                    r as f32
-                })
+                Ok(self.range(self.num(fields, start + k, format_args!("range {}", k + 1))?))
             })
             .collect()
+    }
+
+    /// A `FLASER` line in one pass over its bytes, when it is well formed:
+    /// every number a number, the field count right, the field of view
+    /// known. `None` for anything else, which [`Self::flaser`] then reads
+    /// (and reports) field by field; both give the same record.
+    fn flaser_fast(&self, after_name: &str) -> Option<LogRecord> {
+        let mut f = Fields { bytes: after_name.as_bytes(), at: 0 };
+        let n = f.number().filter(|v| is_count(*v))? as usize;
+        let frame = self.flaser_frame(n)?;
+        let mut ranges = Vec::with_capacity(n);
+        for _ in 0..n {
+            ranges.push(self.range(f.number()?));
+        }
+        let mut v = [0.0; 7];
+        for x in &mut v {
+            *x = f.number()?;
+        }
+        // hostname and logger_timestamp, then nothing.
+        f.next_field()?;
+        f.next_field()?;
+        if f.next_field().is_some() {
+            return None;
+        }
+        let pose = Pose2::new(v[0], v[1], v[2]);
+        let odom = Pose2::new(v[3], v[4], v[5]);
+        Some(self.flaser_record(frame, ranges, pose, odom, v[6]))
     }
 
     fn flaser(&self, f: &[&str]) -> Result<LogRecord, IoError> {
@@ -192,21 +302,12 @@ impl<R: BufRead> CarmenReader<R> {
         let p = 1 + n;
         let pose = self.pose(f, p, "")?;
         let odom = self.pose(f, p + 3, "odom")?;
-        let stamp = self.num(f, p + 6, "ipc_timestamp")? + self.options.time_offset_s;
-        let (angle_min, increment) = match self.options.fov_rad {
-            Some(fov) if n > 1 => (-fov / 2.0, fov / (n - 1) as f64),
-            Some(fov) => (0.0, fov),
-            None => match n {
-                180 => (-PI / 2.0, PI / 180.0),
-                181 => (-PI / 2.0, PI / 180.0),
-                361 => (-PI / 2.0, PI / 360.0),
-                _ => {
-                    return Err(self.err(format!(
-                        "FLASER with {n} beams: the field of view is ambiguous, give it (--fov)"
-                    )));
-                }
-            },
-        };
+        let stamp = self.num(f, p + 6, "ipc_timestamp")?;
+        let frame = self.flaser_frame(n).ok_or_else(|| {
+            self.err(format!(
+                "FLASER with {n} beams: the field of view is ambiguous, give it (--fov)"
+            ))
+        })?;
         self.exact(
             f,
             n + 10,
@@ -215,6 +316,34 @@ impl<R: BufRead> CarmenReader<R> {
                  logger_timestamp"
             ),
         )?;
+        Ok(self.flaser_record(frame, ranges, pose, odom, stamp))
+    }
+
+    /// The first beam's angle and the angle step of a `FLASER` line of `n`
+    /// beams, radians; `None` when the count leaves them ambiguous and no
+    /// field of view was given.
+    fn flaser_frame(&self, n: usize) -> Option<(f64, f64)> {
+        match self.options.fov_rad {
+            Some(fov) if n > 1 => Some((-fov / 2.0, fov / (n - 1) as f64)),
+            Some(fov) => Some((0.0, fov)),
+            None => match n {
+                180 | 181 => Some((-PI / 2.0, PI / 180.0)),
+                361 => Some((-PI / 2.0, PI / 360.0)),
+                _ => None,
+            },
+        }
+    }
+
+    /// The scan record of a `FLASER` line, its fields read; `stamp` as the
+    /// log writes it (before the time offset).
+    fn flaser_record(
+        &self,
+        (angle_min, increment): (f64, f64),
+        ranges: Vec<f32>,
+        pose: Pose2,
+        odom: Pose2,
+        stamp: f64,
+    ) -> LogRecord {
         let scan = Scan::new(
             angle_min as f32,
             increment as f32,
@@ -222,14 +351,14 @@ impl<R: BufRead> CarmenReader<R> {
             self.options.max_range_m as f32,
             ranges,
         )
-        .with_stamp(stamp);
-        Ok(LogRecord::Scan(ScanRecord {
+        .with_stamp(stamp + self.options.time_offset_s);
+        LogRecord::Scan(ScanRecord {
             scan,
             pose: Some(pose),
             odometry: Some(odom),
             position: self.line_no,
             sensor: None,
-        }))
+        })
     }
 
     fn robotlaser(&self, f: &[&str]) -> Result<LogRecord, IoError> {
@@ -307,6 +436,12 @@ impl<R: BufRead> Iterator for CarmenReader<R> {
     }
 }
 
+/// Whether a field read as a number is a count: a whole number from 0 to a
+/// million.
+fn is_count(v: f64) -> bool {
+    v >= 0.0 && v.fract() == 0.0 && v <= 1e6
+}
+
 /// The profile of CARMEN's `laser_type` (`carmen_laser_laser_type_t`):
 /// SICK LMS (0), PLS (1) and S300 (4) are [`SensorProfile::SickLms`], a
 /// Hokuyo URG (2) is [`SensorProfile::Urg04lx`]; a simulated (3) or unknown
@@ -343,14 +478,14 @@ mod tests {
             let sign = ["", "-", "+"][(next() % 3) as usize];
             let s = format!("{sign}{int}.{frac}");
             assert_eq!(
-                short_decimal(&s).map(f64::to_bits),
+                short_decimal(s.as_bytes()).map(f64::to_bits),
                 Some(s.parse::<f64>().unwrap().to_bits()),
                 "{s}"
             );
         }
         for s in ["12", "-0", "0.5", ".5", "5.", "81.9", "-1.5708", "123456789012345"] {
             assert_eq!(
-                short_decimal(s).map(f64::to_bits),
+                short_decimal(s.as_bytes()).map(f64::to_bits),
                 Some(s.parse::<f64>().unwrap().to_bits()),
                 "{s}"
             );
@@ -358,8 +493,64 @@ mod tests {
         for s in
             ["", "-", ".", "1e3", "inf", "nan", "1.2.3", "1234567890123456", "--1", "0x1", " 1"]
         {
-            assert_eq!(short_decimal(s), None, "{s}");
+            assert_eq!(short_decimal(s.as_bytes()), None, "{s}");
         }
+    }
+
+    /// The one-pass `FLASER` reader gives the field-by-field reader's
+    /// record, bit for bit, on every line it takes, and takes no line that
+    /// reader rejects (which then reports it).
+    #[test]
+    fn the_fast_flaser_path_reads_as_the_general_one() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move |m: u64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state % m
+        };
+        let number = |next: &mut dyn FnMut(u64) -> u64| match next(12) {
+            0 => "1e-1".to_string(),
+            1 => "nan".to_string(),
+            2 => "81.91".to_string(),
+            3 => "x".to_string(),
+            4 => "-0.5".to_string(),
+            5 => "1109289934.123456".to_string(),
+            6 => "12345678901234567890123.5".to_string(),
+            7 => "+.5".to_string(),
+            _ => format!("{}.{:03}", next(90), next(1000)),
+        };
+        let (mut taken, mut declined) = (0, 0);
+        for _ in 0..3000 {
+            let n = [180, 181, 361, 7, 0][next(5) as usize];
+            let mut line = format!("FLASER {n}");
+            let fields = n + 9 + [0, 0, 0, 1][next(4) as usize] - [0, 0, 0, 1][next(4) as usize];
+            for _ in 0..fields {
+                line.push(if next(20) == 0 { '\t' } else { ' ' });
+                // Numbers only rarely unusual, so that most lines are taken.
+                let unusual = next(400) == 0;
+                line.push_str(&if unusual { number(&mut next) } else { format!("{}.5", next(9)) });
+            }
+            line.push('\n');
+            let options = CarmenOptions {
+                fov_rad: (next(2) == 0).then_some(3.0),
+                time_offset_s: 0.25,
+                ..Default::default()
+            };
+            let reader = CarmenReader::new(&b""[..], Path::new("t.clf"), options);
+            let fields: Vec<&str> = line.split_ascii_whitespace().skip(1).collect();
+            // Debug text, so that a NaN pose compares equal to itself; a
+            // line the general reader rejects fails here if it is taken.
+            let general = format!("{:?}", reader.flaser(&fields).map_err(|e| e.to_string()));
+            match reader.flaser_fast(line.strip_prefix("FLASER ").unwrap()) {
+                Some(record) => {
+                    taken += 1;
+                    assert_eq!(format!("{:?}", Ok::<_, String>(record)), general, "{line}");
+                }
+                None => declined += 1,
+            }
+        }
+        assert!(taken > 500 && declined > 500, "taken {taken}, declined {declined}");
     }
 
     fn read(text: &str, options: CarmenOptions) -> Vec<Result<LogRecord, IoError>> {

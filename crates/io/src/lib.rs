@@ -1,6 +1,6 @@
 //! File formats for pcaline: scene files (TOML/JSON); logs of scans (CARMEN,
 //! ROS 1 bags, ROS 2 sqlite3 bags, MCAP, JSON, CSV) read by [`read_log`],
-//! streaming; relation files; Foxglove MCAP output ([`FoxgloveMcapWriter`]). Only this crate knows file formats. Every error
+//! streaming, or by [`read_log_chunks`] to parse on other threads; relation files; Foxglove MCAP output ([`FoxgloveMcapWriter`]). Only this crate knows file formats. Every error
 //! names the file and, where it can, the line, message or item; every output
 //! is written atomically.
 //!
@@ -18,6 +18,7 @@ mod foxglove_mcap;
 mod laserscan_codec;
 mod lines_file;
 mod log;
+mod log_chunks;
 mod record;
 mod relations;
 mod ros;
@@ -38,6 +39,7 @@ pub use lines_file::{
     write_json, write_map_csv, write_map_json,
 };
 pub use log::{LogFormat, LogOptions, MAX_COORDINATE_M, check_record, check_scan_header, read_log};
+pub use log_chunks::{LogChunk, read_log_chunks};
 pub use pcaline_geometry::Relation;
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
 pub use relations::{ScanPair, read_relations, read_scan_pairs};

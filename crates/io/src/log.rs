@@ -139,18 +139,10 @@ pub fn read_log(
         None => LogFormat::detect(path)?,
     };
     let mut invalid: Option<IoError> = None;
-    let mut checked = |record: LogRecord| match check_record(&record) {
+    let mut checked = |record: LogRecord| match check_record_in(path, format, &record) {
         Ok(()) => visit(record),
-        Err(message) => {
-            let position = match &record {
-                LogRecord::Scan(s) => s.position,
-                LogRecord::Odometry(o) => o.position,
-            };
-            invalid = Some(match format {
-                // Positions are line numbers in the text formats.
-                LogFormat::Carmen | LogFormat::Csv => IoError::parse(path, Some(position), message),
-                _ => IoError::parse(path, None, format!("scan {position}: {message}")),
-            });
+        Err(e) => {
+            invalid = Some(e);
             ControlFlow::Break(())
         }
     };
@@ -159,6 +151,27 @@ pub fn read_log(
         Some(e) => Err(e),
         None => Ok(count),
     }
+}
+
+/// [`check_record`]'s verdict on a record of the `format` file at `path`,
+/// as the error [`read_log`] returns: at the record's line in the text
+/// formats, naming the scan in the others.
+pub(crate) fn check_record_in(
+    path: &Path,
+    format: LogFormat,
+    record: &LogRecord,
+) -> Result<(), IoError> {
+    check_record(record).map_err(|message| {
+        let position = match record {
+            LogRecord::Scan(s) => s.position,
+            LogRecord::Odometry(o) => o.position,
+        };
+        match format {
+            // Positions are line numbers in the text formats.
+            LogFormat::Carmen | LogFormat::Csv => IoError::parse(path, Some(position), message),
+            _ => IoError::parse(path, None, format!("scan {position}: {message}")),
+        }
+    })
 }
 
 /// Poses and positions beyond this, metres, are refused: no log of a
