@@ -24,6 +24,13 @@ mod run;
 mod scene_cmd;
 mod svg;
 
+/// Scans are parsed on one thread of the pool and freed on the writing
+/// thread: glibc's allocator made them wait on each other's arena locks
+/// (`perf`: a third of the writing thread's context switches), mimalloc
+/// frees across threads without them (BENCHMARKS.md).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 use clap::{Parser, Subcommand};
 use pcaline_cli::{config_file, exit};
 use std::process::ExitCode;
