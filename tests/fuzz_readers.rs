@@ -1,9 +1,10 @@
 //! Every reader fed random bytes and truncated real files: an error or a
-//! result, never a panic. Seeded.
+//! result, never a panic, and the same records and error read whole
+//! (`read_log`) or in chunks parsed apart (`read_log_chunks`). Seeded.
 
 #![allow(clippy::print_stderr)] // the loud report of a missing dataset
 
-use pcaline_io::{LogFormat, LogOptions, read_log, read_relations, read_scene};
+use pcaline_io::{LogFormat, LogOptions, read_log, read_log_chunks, read_relations, read_scene};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -17,7 +18,33 @@ fn tmp_dir() -> PathBuf {
 fn read_all(path: &Path, format: Option<LogFormat>) {
     let mut options = LogOptions::default();
     options.format = format;
-    let _ = read_log(path, &options, |_| ControlFlow::Continue(()));
+    let mut whole = Vec::new();
+    let read = read_log(path, &options, |r| {
+        whole.push(format!("{r:?}"));
+        ControlFlow::Continue(())
+    });
+    let whole_error = read.err().map(|e| e.to_string());
+    let mut chunks = Vec::new();
+    let read = read_log_chunks(path, &options, 3, |c| {
+        chunks.push(c);
+        ControlFlow::Continue(())
+    });
+    let mut in_chunks = Vec::new();
+    let mut chunks_error = None;
+    for chunk in chunks {
+        let parsed = chunk.parse(path, &options, |r| {
+            in_chunks.push(format!("{r:?}"));
+            ControlFlow::Continue(())
+        });
+        if let Err(e) = parsed {
+            chunks_error = Some(e.to_string());
+            break;
+        }
+    }
+    if chunks_error.is_none() {
+        chunks_error = read.err().map(|e| e.to_string());
+    }
+    assert_eq!((in_chunks, chunks_error), (whole, whole_error), "{}", path.display());
 }
 
 const FORMATS: [(&str, LogFormat); 6] = [
