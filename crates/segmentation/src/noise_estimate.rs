@@ -347,6 +347,12 @@ pub fn detect_range_step(ranges: &[f32]) -> f64 {
             // far less than 0.05 mm.
             if d > 5e-5 && d < smallest {
                 smallest = d;
+                // No grid can be found once the smallest difference rounds
+                // below the finest step tried (0.5 mm): the answer is 0
+                // whatever follows, as for any continuous ranges.
+                if grid_step(smallest, 1) < 5e-4 {
+                    return 0.0;
+                }
             }
         }
         previous = Some(r);
@@ -356,7 +362,7 @@ pub fn detect_range_step(ranges: &[f32]) -> f64 {
     }
     let stride = (count / MAX_TRIPLES).max(1);
     for divisor in 1..=5 {
-        let step = (smallest / divisor as f64 * 1e4).round() / 1e4;
+        let step = grid_step(smallest, divisor);
         if step < 5e-4 {
             break;
         }
@@ -371,6 +377,12 @@ pub fn detect_range_step(ranges: &[f32]) -> f64 {
         }
     }
     0.0
+}
+
+/// The grid step [`detect_range_step`] tries for the smallest difference
+/// `smallest` and `divisor`, rounded to 0.1 mm; it falls with `smallest`.
+fn grid_step(smallest: f64, divisor: usize) -> f64 {
+    (smallest / divisor as f64 * 1e4).round() / 1e4
 }
 
 /// The sigma of one band from the mean of the smaller half of its absolute
