@@ -32,7 +32,7 @@ fn read_all(path: &Path, format: Option<LogFormat>) {
     let mut in_chunks = Vec::new();
     let mut chunks_error = None;
     for chunk in chunks {
-        let parsed = chunk.parse(path, &options, |r| {
+        let parsed = chunk.parse(|r| {
             in_chunks.push(format!("{r:?}"));
             ControlFlow::Continue(())
         });

@@ -72,7 +72,7 @@ pub fn for_each_scan<T: Send>(
                     first += chunk.scans();
                     pool.spawn(move |_| {
                         let mut scans = Vec::with_capacity(chunk.scans());
-                        let parsed = chunk.parse(file, options, |record| {
+                        let parsed = chunk.parse(|record| {
                             if let LogRecord::Scan(s) = record {
                                 scans.push(s);
                             }

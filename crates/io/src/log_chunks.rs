@@ -12,10 +12,11 @@
 
 use crate::carmen::CarmenReader;
 use crate::log::{LogFormat, LogOptions, check_record_in, read_log};
-use crate::{IoError, LogRecord};
+use crate::{CarmenOptions, IoError, LogRecord};
 use std::io::BufRead;
 use std::ops::ControlFlow;
 use std::path::Path;
+use std::sync::Arc;
 
 /// A chunk of CARMEN text ends at this many bytes even with fewer scans,
 /// so that a log of other messages does not grow it without bound.
@@ -31,9 +32,16 @@ pub struct LogChunk {
 enum Content {
     /// Records already parsed and checked (the binary, JSON and CSV formats).
     Records { records: Vec<LogRecord>, scans: usize },
-    /// Whole lines of a CARMEN log, the first of them line `first_line`
-    /// (1-based), `scans` of them scan messages.
-    CarmenLines { first_line: usize, scans: usize, text: Vec<u8> },
+    /// Whole lines of the CARMEN log at `path`, the first of them line
+    /// `first_line` (1-based), `scans` of them scan messages, to be read
+    /// with `options`.
+    CarmenLines {
+        path: Arc<Path>,
+        options: CarmenOptions,
+        first_line: usize,
+        scans: usize,
+        text: Vec<u8>,
+    },
 }
 
 impl LogChunk {
@@ -46,16 +54,10 @@ impl LogChunk {
     }
 
     /// Gives the chunk's records to `visit` in log order until it breaks.
-    /// `path` and `options` must be those [`read_log_chunks`] read it with.
     /// Returns the error [`read_log`](crate::read_log) returns at the first
     /// record that fails (to parse, or [`check_record`](crate::check_record)),
     /// after every record before it.
-    pub fn parse(
-        self,
-        path: &Path,
-        options: &LogOptions,
-        mut visit: impl FnMut(LogRecord) -> ControlFlow<()>,
-    ) -> Result<(), IoError> {
+    pub fn parse(self, mut visit: impl FnMut(LogRecord) -> ControlFlow<()>) -> Result<(), IoError> {
         match self.content {
             Content::Records { records, .. } => {
                 for record in records {
@@ -64,12 +66,12 @@ impl LogChunk {
                     }
                 }
             }
-            Content::CarmenLines { first_line, text, .. } => {
+            Content::CarmenLines { path, options, first_line, text, .. } => {
                 let lines =
-                    CarmenReader::new(&text[..], path, options.carmen).starting_at_line(first_line);
+                    CarmenReader::new(&text[..], &path, options).starting_at_line(first_line);
                 for record in lines {
                     let record = record?;
-                    check_record_in(path, LogFormat::Carmen, &record)?;
+                    check_record_in(&path, LogFormat::Carmen, &record)?;
                     if visit(record).is_break() {
                         break;
                     }
@@ -85,7 +87,8 @@ impl LogChunk {
 /// calling `visit` with each until it breaks. A CARMEN log is only split
 /// into lines here; the other formats are parsed as [`read_log`] parses
 /// them. An error that stops the read comes after the chunk of every record
-/// before it. Parse each chunk with [`LogChunk::parse`].
+/// before it. Parse each chunk with [`LogChunk::parse`], on any thread: it
+/// carries the file's name and the options for its reading and errors.
 ///
 /// [`read_log`]: crate::read_log
 pub fn read_log_chunks(
@@ -100,7 +103,7 @@ pub fn read_log_chunks(
         None => LogFormat::detect(path)?,
     };
     if format == LogFormat::Carmen {
-        return read_carmen_chunks(path, scans_per_chunk, visit);
+        return read_carmen_chunks(path, options.carmen, scans_per_chunk, visit);
     }
     let (mut records, mut scans, mut stopped) = (Vec::new(), 0, false);
     let read = read_log(path, options, |record| {
@@ -126,10 +129,12 @@ pub fn read_log_chunks(
 /// [`read_log_chunks`] for a CARMEN log: lines, counting the scan messages.
 fn read_carmen_chunks(
     path: &Path,
+    options: CarmenOptions,
     scans_per_chunk: usize,
     mut visit: impl FnMut(LogChunk) -> ControlFlow<()>,
 ) -> Result<(), IoError> {
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    let shared_path: Arc<Path> = path.into();
     let mut input = std::io::BufReader::with_capacity(1 << 16, file);
     let (mut first_line, mut lines, mut scans) = (1, 0, 0);
     let mut text = Vec::new();
@@ -137,6 +142,8 @@ fn read_carmen_chunks(
         |text: &mut Vec<u8>, first_line: &mut usize, lines: &mut usize, scans: &mut usize| {
             let chunk = LogChunk {
                 content: Content::CarmenLines {
+                    path: Arc::clone(&shared_path),
+                    options,
                     first_line: *first_line,
                     scans: *scans,
                     text: std::mem::take(text),
@@ -217,7 +224,7 @@ mod tests {
         for chunk in chunks {
             let scans = chunk.scans();
             let before = records.len();
-            let parsed = chunk.parse(path, &options, |r| {
+            let parsed = chunk.parse(|r| {
                 records.push(format!("{r:?}"));
                 ControlFlow::Continue(())
             });
