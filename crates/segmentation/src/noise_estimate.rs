@@ -284,7 +284,9 @@ fn collect_triples(
     far.clear();
     let n = points.len();
     let stride = (n / MAX_TRIPLES).max(1);
-    let (xs, beams, angles) = (&points.range_m, &points.beam, &points.angle_rad);
+    // Slices of one length `n`: with `i + gap < n` the compiler drops the
+    // bounds checks in the loop.
+    let (xs, beams, angles) = (&points.range_m[..n], &points.beam[..n], &points.angle_rad[..n]);
     // The half angle is nearly always the same: cache its cosine.
     let (mut last_half, mut cos_half) = (f64::NAN, 1.0);
     let mut i = gap;

@@ -56,10 +56,13 @@ fn farthest_split(
     let inv = |sigma: f64| 1.0 / (sigma_factor * sigma).max(min_distance_m).max(1e-12);
     let (inv_near, inv_far) = (inv(noise.near_sigma_m), inv(noise.far_sigma_m));
     let mut best = (0.0f64, 0usize);
-    for k in r.start + 1..r.end - 1 {
-        let v = points.xy[k] - a;
+    // The inner points, zipped: no bounds checks in the loop.
+    let inner = r.start + 1..r.end - 1;
+    let inner_points = points.xy[inner.clone()].iter().zip(&points.range_m[inner.clone()]);
+    for (k, (p, &range)) in inner.zip(inner_points) {
+        let v = p - a;
         let dist = if len > 1e-12 { (chord.x * v.y - chord.y * v.x).abs() } else { v.norm() };
-        let scale = if points.range_m[k] < noise.far_from_m { inv_near } else { inv_far };
+        let scale = if range < noise.far_from_m { inv_near } else { inv_far };
         let excess = dist * scale;
         if excess > best.0 {
             best = (excess, k);
