@@ -82,28 +82,38 @@ impl ScanPoints {
     /// updating `table`. A scan with unusable geometry (NaN or zero increment)
     /// gives no points.
     pub fn fill_from(&mut self, scan: &Scan, table: &mut BearingTable) {
-        self.clear();
         if !scan.has_usable_geometry() {
+            self.clear();
             return;
         }
         table.update(scan);
         let n = scan.ranges.len();
-        self.xy.reserve(n);
-        self.range_m.reserve(n);
-        self.angle_rad.reserve(n);
-        self.beam.reserve(n);
-        // Zipped iterators: no bounds checks in the loop.
+        // Every beam is written to the next free slot, which advances only
+        // when the range is valid: no branch on the data and no capacity
+        // check per point. The buffers hold a slot per beam; those beyond
+        // the last scan's points are filled once, then cut off below.
+        self.xy.resize(n, Point2::origin());
+        self.range_m.resize(n, 0.0);
+        self.angle_rad.resize(n, 0.0);
+        self.beam.resize(n, 0);
+        let (xy, range_m) = (&mut self.xy[..n], &mut self.range_m[..n]);
+        let (angle_rad, beam) = (&mut self.angle_rad[..n], &mut self.beam[..n]);
+        let mut k = 0;
+        // Zipped iterators: no bounds checks on the inputs.
         let bearings = table.cos.iter().zip(&table.sin).zip(&table.angles);
         for (i, (&r, ((&c, &s), &a))) in scan.ranges.iter().zip(bearings).enumerate() {
-            if !scan.is_valid_range(r) {
-                continue;
-            }
-            let r = f64::from(r);
-            self.xy.push(Point2::new(r * c, r * s));
-            self.range_m.push(r);
-            self.angle_rad.push(a);
-            self.beam.push(i as u32);
+            let r64 = f64::from(r);
+            // `k <= i < n`: the slot exists.
+            xy[k] = Point2::new(r64 * c, r64 * s);
+            range_m[k] = r64;
+            angle_rad[k] = a;
+            beam[k] = i as u32;
+            k += usize::from(scan.is_valid_range(r));
         }
+        self.xy.truncate(k);
+        self.range_m.truncate(k);
+        self.angle_rad.truncate(k);
+        self.beam.truncate(k);
     }
 
     /// Motion deskew: moves every point to where it lies in the sensor
