@@ -67,9 +67,13 @@ pub fn level1_clusters(
         }
         BreakRule::Adaptive { lambda_rad, sigma_factor, noise, grazing } => {
             let mut cached = CachedRule::new(rule);
+            // Slices of one length `n`: no bounds checks at `j - 1` and `j`.
+            let (angle, range) = (&points.angle_rad[..n], &points.range_m[..n]);
+            let xy = &xy[..n];
             for j in 1..n {
-                let step = (points.angle_rad[j] - points.angle_rad[j - 1]).abs();
-                if !cached.is_break(points, j - 1, j, step) {
+                let step = (angle[j] - angle[j - 1]).abs();
+                let threshold = cached.threshold(range[j - 1], range[j], step);
+                if (xy[j] - xy[j - 1]).norm_squared() <= threshold * threshold {
                     continue;
                 }
                 let regular = |a: usize, b: usize| {
@@ -226,13 +230,20 @@ impl<'a> CachedRule<'a> {
         CachedRule { rule, step: f64::NAN, factor: 0.0 }
     }
 
+    /// The break threshold between points at ranges `r_i` and `r_j`,
+    /// `step` radians apart, metres.
     #[inline(always)]
-    fn is_break(&mut self, points: &ScanPoints, i: usize, j: usize, step: f64) -> bool {
+    fn threshold(&mut self, r_i: f64, r_j: f64, step: f64) -> f64 {
         if (step - self.step).abs() > 1e-12 || self.step.is_nan() {
             self.step = step;
             self.factor = self.rule.angular_factor(step);
         }
-        let t = self.rule.threshold_with_factor(points.range_m[i], points.range_m[j], self.factor);
+        self.rule.threshold_with_factor(r_i, r_j, self.factor)
+    }
+
+    #[inline(always)]
+    fn is_break(&mut self, points: &ScanPoints, i: usize, j: usize, step: f64) -> bool {
+        let t = self.threshold(points.range_m[i], points.range_m[j], step);
         farther_than(points, i, j, t)
     }
 }
