@@ -591,9 +591,39 @@ fn intel(
         "log's own (GMapping) poses".into(),
         intel_score(&records, &relations, &corrected)?,
     )];
+    let drifted = INTEL_DRIFT.corrupt_stamped(&corrected, &times, seed);
+    let grid_cells: Vec<(f64, u64)> = if grid {
+        DRIFT_GRID_BIAS_DEG_S
+            .iter()
+            .flat_map(|&b| DRIFT_GRID_SEEDS.iter().map(move |&s| (b, s)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let grid_sources: Vec<(OdometryModel, Vec<Pose2>)> = grid_cells
+        .iter()
+        .map(|&(bias, s)| {
+            let model = drift_model(bias, s);
+            let source = model.corrupt_stamped(&corrected, &times, s);
+            (model, source)
+        })
+        .collect();
+    // Every run on the thread pool at once, gathered in order: the log's own
+    // poses, the seeded drift, then the grid's cells.
+    let sources: Vec<&[Pose2]> = [&corrected[..], &drifted[..]]
+        .into_iter()
+        .chain(grid_sources.iter().map(|(_, source)| &source[..]))
+        .collect();
+    let mut runs = sources
+        .par_iter()
+        .map(|source| intel_run(&records, source, config))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter();
+    let (Some(own_runs), Some(drift_runs)) = (runs.next(), runs.next()) else {
+        anyhow::bail!("the Intel runs are missing");
+    };
     let mut moved = Vec::new();
-    for ((name, _, _), poses) in modes(config).iter().zip(intel_run(&records, &corrected, config)?)
-    {
+    for ((name, _, _), poses) in modes(config).iter().zip(own_runs) {
         let e = trajectory_errors(&poses, &corrected).context("no poses")?;
         moved.push(MovedRow {
             log: "intel.gfs.log".into(),
@@ -604,32 +634,23 @@ fn intel(
             relations: Some(intel_score(&records, &relations, &poses)?),
         });
     }
-    let drifted = INTEL_DRIFT.corrupt_stamped(&corrected, &times, seed);
-    for ((name, _, _), poses) in modes(config).iter().zip(intel_run(&records, &drifted, config)?) {
+    for ((name, _, _), poses) in modes(config).iter().zip(drift_runs) {
         rows.push(row(format!("drifted, {name}"), intel_score(&records, &relations, &poses)?));
     }
-    // The cells on the thread pool, gathered in grid order.
-    let cells: Vec<(f64, u64)> = if grid {
-        DRIFT_GRID_BIAS_DEG_S
-            .iter()
-            .flat_map(|&b| DRIFT_GRID_SEEDS.iter().map(move |&s| (b, s)))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let cells = cells
+    let runs: Vec<Vec<Vec<Pose2>>> = runs.collect();
+    let cells = grid_cells
         .par_iter()
-        .map(|&(bias, s)| {
-            let model = drift_model(bias, s);
-            let drifted = model.corrupt_stamped(&corrected, &times, s);
+        .zip(&grid_sources)
+        .zip(&runs)
+        .map(|((&(bias, s), (model, _)), cell_runs)| {
             modes(config)
                 .iter()
-                .zip(intel_run(&records, &drifted, config)?)
+                .zip(cell_runs)
                 .map(|((name, _, _), poses)| {
                     // At the scans, aligned at the first scan: the drift
                     // before it is no aiding's to undo.
                     let e = aligned_trajectory_errors(
-                        &at_scans(&records, &poses),
+                        &at_scans(&records, poses),
                         &at_scans(&records, &corrected),
                     )
                     .context("no scans")?;
@@ -640,7 +661,7 @@ fn intel(
                         mode: name.to_string(),
                         heading_rms_deg: e.heading_rms_rad.to_degrees(),
                         position_rms_m: e.position_rms_m,
-                        relations: intel_score(&records, &relations, &poses)?,
+                        relations: intel_score(&records, &relations, poses)?,
                     })
                 })
                 .collect::<Result<Vec<_>>>()
