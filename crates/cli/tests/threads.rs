@@ -45,6 +45,43 @@ fn detect_writes_the_same_bytes_on_one_thread_and_on_several() {
     assert!(files[0].1 == files[1].1, "the MCAP files differ");
 }
 
+/// A format parsed on the reader thread (JSON Lines) goes through the same
+/// chunks: the same bytes on any number of threads, every scan numbered in
+/// order across the batches, and a bad scan after them the same error.
+#[test]
+fn a_json_log_gives_the_same_bytes_and_error_on_any_number_of_threads() {
+    let scan = |k: usize| {
+        let ranges: Vec<String> =
+            (0..180).map(|i| format!("{}", 2.0 + 0.01 * ((i + k) % 9) as f64)).collect();
+        format!(
+            "{{\"angle_min\": -1.57, \"angle_increment\": 0.0175, \"range_min\": 0.1, \"range_max\": 30.0, \"ranges\": [{}], \"stamp_s\": {k}}}\n",
+            ranges.join(", ")
+        )
+    };
+    let text: String = (0..600).map(scan).collect();
+    let log = tmp("threads.jsonl");
+    std::fs::write(&log, &text).unwrap();
+    let one = with_threads(1, &["detect", s(&log)]);
+    let two = with_threads(2, &["detect", s(&log)]);
+    assert!(one == two, "the outputs differ");
+    let scans = common::json_lines(&one);
+    assert_eq!(scans.len(), 600);
+    assert!(scans.iter().enumerate().all(|(k, v)| v["scan"] == k), "scan numbers out of order");
+    let bad = tmp("threads-bad.jsonl");
+    std::fs::write(&bad, format!("{text}{{\"ranges\": 5}}\n")).unwrap();
+    let runs: Vec<_> = ["1", "2"]
+        .into_iter()
+        .map(|n| {
+            let out = pcaline(&["--threads", n, "detect", s(&bad)]);
+            assert_eq!(out.status.code(), Some(2), "--threads {n}");
+            (out.stdout, String::from_utf8_lossy(&out.stderr).to_string())
+        })
+        .collect();
+    assert!(runs[0].1.contains("threads-bad.jsonl"), "{}", runs[0].1);
+    assert_eq!(common::json_lines(&runs[0].0).len(), 600);
+    assert!(runs[0] == runs[1], "the runs differ");
+}
+
 #[test]
 fn a_bad_line_is_the_same_error_on_any_number_of_threads() {
     // The 1988 scans of the log, then a FLASER line whose range is not a number.
