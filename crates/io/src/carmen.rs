@@ -43,34 +43,44 @@ const POWERS_OF_TEN: [f64; 16] =
 
 /// A plain decimal of at most 15 digits (`-12.345`, `7`, `.5`), parsed
 /// exactly as `str::parse::<f64>` parses it; `None` for anything else
-/// (exponents, `inf`, `nan`, more digits), which the caller hands to
-/// `str::parse`. Most CARMEN fields are such decimals, and this is several
-/// times faster. Exact (Clinger's fast path): the digits as an integer
-/// below 2^53 and a power of ten up to 10^15 are both exact `f64`s, and
-/// IEEE division rounds their quotient correctly.
+/// (exponents, `inf`, `nan`, more digits, whitespace), which the caller
+/// hands to `str::parse`. Most CARMEN fields are such decimals, and this is
+/// several times faster.
 fn short_decimal(s: &[u8]) -> Option<f64> {
-    let (negative, digits) = match s {
-        [b'-', rest @ ..] => (true, rest),
-        [b'+', rest @ ..] => (false, rest),
-        rest => (false, rest),
-    };
-    let (mut mantissa, mut count, mut decimals, mut point) = (0u64, 0usize, 0usize, false);
-    for &b in digits {
-        match b {
-            b'0'..=b'9' => {
-                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(b - b'0'));
-                count += 1;
+    let (value, end) = leading_decimal(s);
+    if end == s.len() { value } else { None }
+}
+
+/// The field at the start of `s` (up to ASCII whitespace or the end) read
+/// as a plain decimal of at most 15 digits, and where the field ends: one
+/// pass finds both. The value is `None` when the field is anything else.
+/// Exact (Clinger's fast path): the digits as an integer below 2^53 and a
+/// power of ten up to 10^15 are both exact `f64`s, and IEEE division
+/// rounds their quotient correctly.
+fn leading_decimal(s: &[u8]) -> (Option<f64>, usize) {
+    let negative = s.first() == Some(&b'-');
+    let mut i = usize::from(negative || s.first() == Some(&b'+'));
+    let (mut mantissa, mut digits, mut decimals) = (0u64, 0usize, 0usize);
+    let (mut point, mut plain) = (false, true);
+    while i < s.len() {
+        match s[i] {
+            c @ b'0'..=b'9' => {
+                // Wraps only past 19 digits, which are not plain anyway.
+                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+                digits += 1;
                 decimals += usize::from(point);
             }
             b'.' if !point => point = true,
-            _ => return None,
+            c if c.is_ascii_whitespace() => break,
+            _ => plain = false,
         }
+        i += 1;
     }
-    if count == 0 || count > 15 {
-        return None;
+    if !(plain && (1..=15).contains(&digits)) {
+        return (None, i);
     }
     let v = mantissa as f64 / POWERS_OF_TEN[decimals];
-    Some(if negative { -v } else { v })
+    (Some(if negative { -v } else { v }), i)
 }
 
 /// The whitespace-separated fields of a line, taken left to right without
@@ -99,45 +109,21 @@ impl<'a> Fields<'a> {
 
     /// The next field as a number, read as [`CarmenReader::num`] reads it;
     /// `None` at the end of the line or when it is not a number. A plain
-    /// decimal is read as [`short_decimal`] reads it, in the same pass
-    /// that finds its end (this runs for every range of a log); anything
+    /// decimal is read in the same pass that finds the field's end
+    /// ([`leading_decimal`]; this runs for every range of a log); anything
     /// else goes to `str::parse`.
     fn number(&mut self) -> Option<f64> {
         let b = self.bytes;
-        let mut i = self.at;
-        while i < b.len() && b[i].is_ascii_whitespace() {
-            i += 1;
+        let mut start = self.at;
+        while start < b.len() && b[start].is_ascii_whitespace() {
+            start += 1;
         }
-        let start = i;
-        let negative = b.get(i) == Some(&b'-');
-        if negative || b.get(i) == Some(&b'+') {
-            i += 1;
-        }
-        let (mut mantissa, mut digits, mut decimals) = (0u64, 0usize, 0usize);
-        let (mut point, mut plain) = (false, true);
-        while i < b.len() {
-            match b[i] {
-                c @ b'0'..=b'9' => {
-                    // Wraps only past 19 digits, which are not plain anyway.
-                    mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
-                    digits += 1;
-                    decimals += usize::from(point);
-                }
-                b'.' if !point => point = true,
-                c if c.is_ascii_whitespace() => break,
-                _ => plain = false,
-            }
-            i += 1;
-        }
-        self.at = i;
-        if i == start {
+        let (value, length) = leading_decimal(&b[start..]);
+        self.at = start + length;
+        if length == 0 {
             return None;
         }
-        if plain && (1..=15).contains(&digits) {
-            let v = mantissa as f64 / POWERS_OF_TEN[decimals];
-            return Some(if negative { -v } else { v });
-        }
-        std::str::from_utf8(&b[start..i]).ok()?.parse().ok()
+        value.or_else(|| std::str::from_utf8(&b[start..self.at]).ok()?.parse().ok())
     }
 }
 

@@ -136,32 +136,16 @@ fn read_carmen_chunks(
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
     let shared_path: Arc<Path> = path.into();
     let mut input = std::io::BufReader::with_capacity(1 << 16, file);
-    let (mut first_line, mut lines, mut scans) = (1, 0, 0);
-    let mut text = Vec::new();
-    let mut emit =
-        |text: &mut Vec<u8>, first_line: &mut usize, lines: &mut usize, scans: &mut usize| {
-            let chunk = LogChunk {
-                content: Content::CarmenLines {
-                    path: Arc::clone(&shared_path),
-                    options,
-                    first_line: *first_line,
-                    scans: *scans,
-                    text: std::mem::take(text),
-                },
-            };
-            *first_line += *lines;
-            (*lines, *scans) = (0, 0);
-            visit(chunk)
-        };
+    let mut g = Gathered { first_line: 1, lines: 0, scans: 0, text: Vec::new() };
     loop {
-        let start = text.len();
-        let read = match input.read_until(b'\n', &mut text) {
+        let start = g.text.len();
+        let read = match input.read_until(b'\n', &mut g.text) {
             Ok(read) => read,
             Err(e) => {
                 // The lines before the failed read come first.
-                text.truncate(start);
-                if lines > 0 {
-                    let _ = emit(&mut text, &mut first_line, &mut lines, &mut scans);
+                g.text.truncate(start);
+                if g.lines > 0 {
+                    let _ = visit(g.take(&shared_path, options));
                 }
                 return Err(IoError::io(path, e));
             }
@@ -169,18 +153,48 @@ fn read_carmen_chunks(
         if read == 0 {
             break;
         }
-        lines += 1;
-        scans += usize::from(is_scan_line(&text[start..]));
-        if (scans == scans_per_chunk || text.len() >= MAX_CHUNK_BYTES)
-            && emit(&mut text, &mut first_line, &mut lines, &mut scans).is_break()
+        g.lines += 1;
+        g.scans += usize::from(is_scan_line(&g.text[start..]));
+        if (g.scans == scans_per_chunk || g.text.len() >= MAX_CHUNK_BYTES)
+            && visit(g.take(&shared_path, options)).is_break()
         {
             return Ok(());
         }
     }
-    if lines > 0 {
-        let _ = emit(&mut text, &mut first_line, &mut lines, &mut scans);
+    if g.lines > 0 {
+        let _ = visit(g.take(&shared_path, options));
     }
     Ok(())
+}
+
+/// The lines of a CARMEN log read since the last chunk.
+struct Gathered {
+    /// The first one's line number, 1-based.
+    first_line: usize,
+    /// How many.
+    lines: usize,
+    /// How many are scan messages.
+    scans: usize,
+    text: Vec<u8>,
+}
+
+impl Gathered {
+    /// The lines as a chunk of the log at `path`; the next lines gathered
+    /// follow them.
+    fn take(&mut self, path: &Arc<Path>, options: CarmenOptions) -> LogChunk {
+        let chunk = LogChunk {
+            content: Content::CarmenLines {
+                path: Arc::clone(path),
+                options,
+                first_line: self.first_line,
+                scans: self.scans,
+                text: std::mem::take(&mut self.text),
+            },
+        };
+        self.first_line += self.lines;
+        (self.lines, self.scans) = (0, 0);
+        chunk
+    }
 }
 
 /// Whether a CARMEN line is a scan message: its first field is `FLASER` or
