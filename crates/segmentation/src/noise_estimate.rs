@@ -218,8 +218,7 @@ pub fn estimate_range_noise(
     // lowest allowed value, or, when that is the nominal, the nominal's
     // `consistent_scale` (module docs).
     let steady = [nominal.near_sigma_m, nominal.far_sigma_m].map(|band| {
-        let base = band.hypot(quantisation);
-        let lo = (band * estimation.min_scale).hypot(quantisation);
+        let (base, lo) = band_floor(band, estimation, quantisation);
         if lo >= base { estimation.consistent_scale.max(1.0) * base } else { lo }
     });
     // Consecutive beams first.
@@ -248,8 +247,7 @@ pub fn estimate_range_noise(
     for (band, estimate) in
         [(&mut noise.near_sigma_m, estimates[0]), (&mut noise.far_sigma_m, estimates[1])]
     {
-        let base = band.hypot(quantisation);
-        let lo = (*band * estimation.min_scale).hypot(quantisation);
+        let (base, lo) = band_floor(*band, estimation, quantisation);
         let hi = (*band * estimation.max_scale).max(base);
         *band = match estimate {
             Some(estimate) if estimate > base => {
@@ -262,6 +260,13 @@ pub fn estimate_range_noise(
         .max(estimation.floor_m);
     }
     NoiseEstimate { noise, samples, range_step_m: range_step_m.max(0.0) }
+}
+
+/// A band's nominal sigma with the range grid's quantisation added, and the
+/// lowest sigma an estimate may set (`min_scale` of the nominal, with the
+/// quantisation).
+fn band_floor(band: f64, estimation: &NoiseEstimation, quantisation: f64) -> (f64, f64) {
+    (band.hypot(quantisation), (band * estimation.min_scale).hypot(quantisation))
 }
 
 /// Consecutive beams' sigma over every other beam's beyond which a band is
