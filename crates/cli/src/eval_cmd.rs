@@ -790,6 +790,23 @@ fn print_csail(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             t.relations.rotation_std_deg
         )?;
     }
+    for l in &r.csail_loops {
+        outln!(
+            "{} loops against the corrected poses: {} standing, {} of them wrong (off by more than {} m or {}°; median {:.2} m / {:.2}°, max {:.2} m / {:.2}°); {} switched off, {} of them wrong; {} unchecked",
+            l.name,
+            l.standing,
+            l.standing_wrong,
+            pcaline_eval::WRONG_LOOP_M,
+            pcaline_eval::WRONG_LOOP_DEG,
+            l.standing_error_m[0],
+            l.standing_error_deg[0],
+            l.standing_error_m[1],
+            l.standing_error_deg[1],
+            l.switched_off,
+            l.switched_off_wrong,
+            l.unchecked
+        )?;
+    }
     Ok(())
 }
 

@@ -11,8 +11,8 @@ use pcaline::aiding::{Aiding, AidingConfig, AidingMode, Localizer, LoopClosureCo
 use pcaline::geometry::SensorProfile;
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
-    RelationErrors, StampedTrajectory, aligned_trajectory_errors, relation_errors,
-    rigidly_aligned_trajectory_errors, trajectory_errors,
+    LoopCheck, RelationErrors, StampedTrajectory, aligned_trajectory_errors, reference_by_source,
+    relation_errors, rigidly_aligned_trajectory_errors, trajectory_errors,
 };
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
@@ -150,6 +150,9 @@ pub struct RealReport {
     /// MIT CSAIL trajectories against the corrected poses (relations between
     /// consecutive corrected scans).
     pub csail: Vec<TrajectoryRow>,
+    /// MIT CSAIL: the loops of each loop-closing mode against the corrected
+    /// poses.
+    pub csail_loops: Vec<LoopRow>,
     /// Intel: the relation metric of the log's own poses, then of the drifted
     /// poses raw and aided.
     pub intel: Vec<TrajectoryRow>,
@@ -311,7 +314,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
             )
         },
     );
-    let (csail_pairs, csail) = csail?;
+    let (csail_pairs, csail, csail_loops) = csail?;
     let (intel, mut own_poses, drift_grid) = intel?;
     own_poses.extend(csail_own?);
     let (detection, detection_with_sensor): (Vec<_>, Vec<_>) = detection?.into_iter().unzip();
@@ -319,6 +322,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
         config: config.name.clone(),
         csail_pairs,
         csail,
+        csail_loops,
         intel,
         own_poses,
         drift_grid,
@@ -347,6 +351,20 @@ impl Loops {
         self.loops.iter_mut().map(|a| a.step_with(scan.stamp_s, source, lines).0).collect()
     }
 
+    /// The loops of each loop-closing mode checked against `reference`
+    /// (a pose per scan), named as the mode.
+    fn check_loops(&self, config: &NamedConfig, reference: &[Option<Pose2>]) -> Vec<LoopRow> {
+        modes(config)
+            .iter()
+            .zip(&self.loops)
+            .filter_map(|((name, _, _), runner)| {
+                let l = runner.loop_closing()?;
+                let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
+                Some(LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, reference)))
+            })
+            .collect()
+    }
+
     /// Replaces the poses of the loop-closing modes by their optimized
     /// trajectories (every scan was stepped).
     fn finish(&mut self, poses: &mut [Vec<Pose2>]) {
@@ -360,20 +378,34 @@ impl Loops {
     }
 }
 
-/// MIT CSAIL: raw and aided odometry at the scans with corrected poses.
-fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>)> {
+/// A raw scan's corrected pose is carried from the nearest corrected scan
+/// within this many scans by the raw odometry (to check loops at keyframes
+/// without a corrected pose of their own; the corrected log holds one scan
+/// in five). Short: the odometry lags the scans by about 0.1 s
+/// (`docs/accuracy.md`), so carrying it across a fast turn adds error.
+const CSAIL_REFERENCE_GAP_SCANS: usize = 2;
+
+/// MIT CSAIL: raw and aided odometry at the scans with corrected poses, and
+/// the loops of the loop-closing modes against the corrected poses.
+fn csail(data: &Path, config: &NamedConfig) -> Result<CsailResult> {
     let dir = data.join("mit-csail");
     let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt"))?;
     let mut loops = Loops::new(config)?;
     let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); modes(config).len()];
+    let mut sources = Vec::new();
     for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
         let LogRecord::Scan(s) = record? else { continue };
         let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
         for (out, pose) in poses.iter_mut().zip(loops.step(&s.scan, &source)) {
             out.push(pose);
         }
+        sources.push(source);
     }
+    let corrected: Vec<(usize, Pose2)> =
+        pairs.iter().map(|p| (p.raw_index, p.corrected_pose)).collect();
+    let reference = reference_by_source(&corrected, &sources, CSAIL_REFERENCE_GAP_SCANS);
     loops.finish(&mut poses);
+    let loop_rows = loops.check_loops(config, &reference);
     // Relations between consecutive corrected scans, stamped by pair index.
     let reference: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
     let relations: Vec<Relation> = (1..reference.len())
@@ -408,7 +440,55 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<(usize, Vec<TrajectoryRow>
             relations: r.into(),
         });
     }
-    Ok((pairs.len(), rows))
+    Ok((pairs.len(), rows, loop_rows))
+}
+
+/// What [`csail`] measures: the pairs, a row per mode, the loops.
+type CsailResult = (usize, Vec<TrajectoryRow>, Vec<LoopRow>);
+
+/// One loop-closing mode's loops on MIT CSAIL against the corrected poses
+/// ([`LoopCheck`]; wrong: off by more than [`pcaline_eval::WRONG_LOOP_M`]
+/// or [`pcaline_eval::WRONG_LOOP_DEG`]).
+#[derive(Debug, Serialize)]
+pub struct LoopRow {
+    /// The mode.
+    pub name: String,
+    /// Loop edges standing at the end of the run.
+    pub standing: usize,
+    /// Of those, wrong.
+    pub standing_wrong: usize,
+    /// Loop edges the optimizer switched off.
+    pub switched_off: usize,
+    /// Of those, wrong.
+    pub switched_off_wrong: usize,
+    /// Loop edges with a keyframe too far from any corrected scan.
+    pub unchecked: usize,
+    /// Median and largest error of the standing loops, metres.
+    pub standing_error_m: [f64; 2],
+    /// Median and largest error of the standing loops, degrees.
+    pub standing_error_deg: [f64; 2],
+}
+
+impl LoopRow {
+    fn new(name: &str, c: &LoopCheck) -> Self {
+        let median_max = |mut v: Vec<f64>| -> [f64; 2] {
+            v.sort_by(f64::total_cmp);
+            match v.last() {
+                Some(&max) => [v[(v.len() - 1) / 2], max],
+                None => [f64::NAN; 2],
+            }
+        };
+        LoopRow {
+            name: name.to_string(),
+            standing: c.standing,
+            standing_wrong: c.standing_wrong,
+            switched_off: c.switched_off,
+            switched_off_wrong: c.switched_off_wrong,
+            unchecked: c.unchecked,
+            standing_error_m: median_max(c.standing_errors.iter().map(|e| e.0).collect()),
+            standing_error_deg: median_max(c.standing_errors.iter().map(|e| e.1).collect()),
+        }
+    }
 }
 
 /// A record of the Intel log in time order: its time, corrected pose and

@@ -237,6 +237,15 @@ fn real_data_eval_checks_its_metrics_against_the_datasets() {
     // MIT CSAIL: the raw odometry drifts 84° from the corrected poses (the dataset's notes).
     let raw = &v["csail"][0];
     assert!((f(&raw["heading_max_deg"]) - 84.0).abs() < 1.0, "{raw}");
+    // The loop-closing mode's loops are checked against the corrected poses:
+    // it closes some, and nearly every keyframe lies near a corrected scan.
+    let loops = &v["csail_loops"][0];
+    assert_eq!(loops["name"], "estimator + loop closure");
+    let n = |k: &str| loops[k].as_u64().unwrap();
+    assert!(n("standing") > 0 && n("standing_wrong") <= n("standing"), "{loops}");
+    assert!(n("switched_off_wrong") <= n("switched_off"), "{loops}");
+    assert!(n("unchecked") * 5 <= n("standing") + n("switched_off"), "{loops}");
+    assert!(f(&loops["standing_error_m"][0]) <= f(&loops["standing_error_m"][1]), "{loops}");
     // Intel: every relation meets a pose; the log's own GMapping poses score
     // about 0.08 m (issue 6), the drifted odometry far worse, and full-pose
     // aiding recovers most of it.

@@ -16,6 +16,7 @@ mod detection;
 mod detection_run;
 mod fit_accuracy;
 mod localization;
+mod loop_check;
 mod map_quality;
 mod relation_metric;
 mod reproduce;
@@ -33,6 +34,7 @@ pub use fit_accuracy::{FitAccuracy, RangeBearingAccuracy, fit_accuracy, range_be
 pub use localization::{
     AidedRun, AidedScore, MAP_MAX_ANGLE_DEG, MAP_TOLERANCE_M, ObservedRunError, RunStep,
 };
+pub use loop_check::{LoopCheck, WRONG_LOOP_DEG, WRONG_LOOP_M, reference_by_source};
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
 pub use relation_metric::{RelationErrors, StampedTrajectory, relation_errors};
 pub use reproduce::{
