@@ -13,7 +13,8 @@ use pcaline::aiding::{AidingConfig, LoopClosing, LoopClosureConfig, LoopOutcome,
 use pcaline::mapping::MapConfig;
 use pcaline::{Config, LineDetector, Pose2};
 use pcaline_eval::{
-    aligned_trajectory_errors, rigidly_aligned_trajectory_errors, trajectory_errors,
+    LoopCheck, aligned_trajectory_errors, reference_by_source, rigidly_aligned_trajectory_errors,
+    trajectory_errors,
 };
 use pcaline_io::{CarmenOptions, CarmenReader, LogRecord, read_scan_pairs};
 use std::path::Path;
@@ -45,29 +46,24 @@ fn csail_raw_odometry_heading_is_ahead_of_the_estimator_alone() {
     let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt")).unwrap();
     let log = dir.join("mit-csail.clf");
     let (poses, slam) = run(&log, |s| s.odometry.or(s.pose).unwrap());
-    let accepted = slam.loops().iter().filter(|r| r.outcome == LoopOutcome::Accepted).count();
     // Every accepted loop against the corrected poses, carried from the
     // nearest paired scan (at most 5 scans away) by the raw odometry.
-    let odometry: Vec<Option<Pose2>> = CarmenReader::open(&log, CarmenOptions::default())
+    let odometry: Vec<Pose2> = CarmenReader::open(&log, CarmenOptions::default())
         .unwrap()
         .filter_map(|r| match r.unwrap() {
-            LogRecord::Scan(s) => Some(s.odometry),
+            LogRecord::Scan(s) => Some(s.odometry.unwrap()),
             _ => None,
         })
         .collect();
-    let truth_at = |scan: usize| {
-        let p = pairs.iter().min_by_key(|p| p.raw_index.abs_diff(scan))?;
-        let (from, to) = (odometry[p.raw_index]?, odometry[scan]?);
-        (p.raw_index.abs_diff(scan) <= 5).then(|| p.corrected_pose.compose(&from.between(&to)))
-    };
-    let mut checked = 0;
-    for r in slam.loops().iter().filter(|r| r.outcome == LoopOutcome::Accepted) {
-        let (k, j) = (slam.keyframes()[r.keyframe].scan, slam.keyframes()[r.candidate].scan);
-        let (Some(tk), Some(tj)) = (truth_at(k), truth_at(j)) else { continue };
-        let e = tj.between(&tk).between(&r.candidate_from_current);
-        assert!(e.x().hypot(e.y()) < 0.5, "a false loop stands: {r:?}, off by {e:?}");
-        checked += 1;
+    let corrected: Vec<(usize, Pose2)> =
+        pairs.iter().map(|p| (p.raw_index, p.corrected_pose)).collect();
+    let reference = reference_by_source(&corrected, &odometry, 5);
+    let scans: Vec<usize> = slam.keyframes().iter().map(|k| k.scan).collect();
+    let check = LoopCheck::of(slam.loops(), &scans, &reference);
+    for (m, deg) in &check.standing_errors {
+        assert!(*m < 0.5, "a false loop stands: off by {m} m, {deg}°: {check:?}");
     }
+    let (accepted, checked) = (check.standing + check.unchecked, check.standing);
     let picked: Vec<Pose2> = pairs.iter().map(|p| poses[p.raw_index]).collect();
     let reference: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
     let e = rigidly_aligned_trajectory_errors(&picked, &reference).unwrap();
