@@ -790,7 +790,12 @@ fn print_csail(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             t.relations.rotation_std_deg
         )?;
     }
-    for l in &r.csail_loops {
+    print_loops(&r.csail_loops)
+}
+
+/// One line per loop-closing run: its loops against the reference poses.
+fn print_loops(rows: &[crate::eval_real::LoopRow]) -> anyhow::Result<()> {
+    for l in rows {
         outln!(
             "{} loops against the corrected poses: {} standing, {} of them wrong (off by more than {} m or {}°; median {:.2} m / {:.2}°, max {:.2} m / {:.2}°); {} switched off, {} of them wrong; {} unchecked",
             l.name,
@@ -836,7 +841,7 @@ fn print_intel(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             t.relations.rotation_std_deg
         )?;
     }
-    Ok(())
+    print_loops(&r.intel_loops)
 }
 
 /// How far each mode moves a log's own corrected poses.

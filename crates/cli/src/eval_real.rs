@@ -156,6 +156,9 @@ pub struct RealReport {
     /// Intel: the relation metric of the log's own poses, then of the drifted
     /// poses raw and aided.
     pub intel: Vec<TrajectoryRow>,
+    /// Intel: the loops of the loop-closing mode, with the log's own poses
+    /// and with the seeded drift as the source, against the corrected poses.
+    pub intel_loops: Vec<LoopRow>,
     /// Intel and CSAIL with their own corrected poses as the source: how far
     /// each mode moves them.
     pub own_poses: Vec<MovedRow>,
@@ -315,7 +318,8 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
         },
     );
     let (csail_pairs, csail, csail_loops) = csail?;
-    let (intel, mut own_poses, drift_grid) = intel?;
+    let IntelResult { rows: intel, moved: mut own_poses, cells: drift_grid, loops: intel_loops } =
+        intel?;
     own_poses.extend(csail_own?);
     let (detection, detection_with_sensor): (Vec<_>, Vec<_>) = detection?.into_iter().unzip();
     Ok(RealReport {
@@ -324,6 +328,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
         csail,
         csail_loops,
         intel,
+        intel_loops,
         own_poses,
         drift_grid,
         intel_drift_seed: seed,
@@ -564,12 +569,14 @@ fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> 
 
 /// Each mode's pose at every record with `source` (one pose per record) as
 /// the localization source: at a scan, its aiding loop's output; between
-/// scans, the source's motion since the last scan composed onto it.
+/// scans, the source's motion since the last scan composed onto it. With
+/// them, the loops of each loop-closing mode checked against the records'
+/// corrected poses (exact: the drift is added to them).
 fn intel_run(
     records: &[IntelRecord],
     source: &[Pose2],
     config: &NamedConfig,
-) -> Result<Vec<Vec<Pose2>>> {
+) -> Result<(Vec<Vec<Pose2>>, Vec<LoopRow>)> {
     let mut loops = runners(config)?;
     let mut out: Vec<Vec<Pose2>> = vec![Vec::with_capacity(records.len()); loops.len()];
     let mut at_last_scan: Option<(Pose2, Vec<Pose2>)> = None;
@@ -612,7 +619,19 @@ fn intel_run(
             }
         }
     }
-    Ok(out)
+    let corrected: Vec<Pose2> = records.iter().map(|r| r.pose).collect();
+    let reference: Vec<Option<Pose2>> =
+        at_scans(records, &corrected).into_iter().map(Some).collect();
+    let checks = modes(config)
+        .iter()
+        .zip(&loops)
+        .filter_map(|((name, _, _), runner)| {
+            let l = runner.loop_closing()?;
+            let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
+            Some(LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, &reference)))
+        })
+        .collect();
+    Ok((out, checks))
 }
 
 /// The relation metric of poses at the Intel records' times.
@@ -647,12 +666,7 @@ fn drift_model(bias_deg_s: f64, seed: u64) -> OdometryModel {
 /// Intel: the relation metric of the log's own poses, how far each mode
 /// moves them when they are the source, the seeded drift [`INTEL_DRIFT`],
 /// and the drift grid.
-fn intel(
-    data: &Path,
-    seed: u64,
-    config: &NamedConfig,
-    grid: bool,
-) -> Result<(Vec<TrajectoryRow>, Vec<MovedRow>, Vec<DriftCell>)> {
+fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<IntelResult> {
     let relations = read_relations(&data.join("intel").join("intel.relations"))?;
     let records = intel_records(data, config)?;
     let corrected: Vec<Pose2> = records.iter().map(|r| r.pose).collect();
@@ -699,9 +713,17 @@ fn intel(
         .map(|source| intel_run(&records, source, config))
         .collect::<Result<Vec<_>>>()?
         .into_iter();
-    let (Some(own_runs), Some(drift_runs)) = (runs.next(), runs.next()) else {
+    let (Some((own_runs, own_loops)), Some((drift_runs, drift_loops))) = (runs.next(), runs.next())
+    else {
         anyhow::bail!("the Intel runs are missing");
     };
+    let mut loop_rows = Vec::new();
+    for (prefix, rows) in [("own poses", own_loops), ("drifted", drift_loops)] {
+        loop_rows.extend(rows.into_iter().map(|mut r| {
+            r.name = format!("{prefix}, {}", r.name);
+            r
+        }));
+    }
     let mut moved = Vec::new();
     for ((name, _, _), poses) in modes(config).iter().zip(own_runs) {
         let e = trajectory_errors(&poses, &corrected).context("no poses")?;
@@ -717,7 +739,7 @@ fn intel(
     for ((name, _, _), poses) in modes(config).iter().zip(drift_runs) {
         rows.push(row(format!("drifted, {name}"), intel_score(&records, &relations, &poses)?));
     }
-    let runs: Vec<Vec<Vec<Pose2>>> = runs.collect();
+    let runs: Vec<Vec<Vec<Pose2>>> = runs.map(|(poses, _)| poses).collect();
     let cells = grid_cells
         .par_iter()
         .zip(&grid_sources)
@@ -750,7 +772,20 @@ fn intel(
         .into_iter()
         .flatten()
         .collect();
-    Ok((rows, moved, cells))
+    Ok(IntelResult { rows, moved, cells, loops: loop_rows })
+}
+
+/// What [`intel`] measures.
+struct IntelResult {
+    /// The relation metric of the own, drifted and aided poses.
+    rows: Vec<TrajectoryRow>,
+    /// How far each mode moves the log's own poses.
+    moved: Vec<MovedRow>,
+    /// The drift grid.
+    cells: Vec<DriftCell>,
+    /// The loops of the own-pose and drifted runs against the corrected
+    /// poses.
+    loops: Vec<LoopRow>,
 }
 
 /// The poses at the records that are scans.
