@@ -356,20 +356,6 @@ impl Loops {
         self.loops.iter_mut().map(|a| a.step_with(scan.stamp_s, source, lines).0).collect()
     }
 
-    /// The loops of each loop-closing mode checked against `reference`
-    /// (a pose per scan), named as the mode.
-    fn check_loops(&self, config: &NamedConfig, reference: &[Option<Pose2>]) -> Vec<LoopRow> {
-        modes(config)
-            .iter()
-            .zip(&self.loops)
-            .filter_map(|((name, _, _), runner)| {
-                let l = runner.loop_closing()?;
-                let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
-                Some(LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, reference)))
-            })
-            .collect()
-    }
-
     /// Replaces the poses of the loop-closing modes by their optimized
     /// trajectories (every scan was stepped).
     fn finish(&mut self, poses: &mut [Vec<Pose2>]) {
@@ -408,9 +394,9 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<CsailResult> {
     }
     let corrected: Vec<(usize, Pose2)> =
         pairs.iter().map(|p| (p.raw_index, p.corrected_pose)).collect();
-    let reference = reference_by_source(&corrected, &sources, CSAIL_REFERENCE_GAP_SCANS);
+    let per_scan = reference_by_source(&corrected, &sources, CSAIL_REFERENCE_GAP_SCANS);
     loops.finish(&mut poses);
-    let loop_rows = loops.check_loops(config, &reference);
+    let loop_rows = check_loops(config, &loops.loops, &per_scan);
     // Relations between consecutive corrected scans, stamped by pair index.
     let reference: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
     let relations: Vec<Relation> = (1..reference.len())
@@ -451,12 +437,31 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<CsailResult> {
 /// What [`csail`] measures: the pairs, a row per mode, the loops.
 type CsailResult = (usize, Vec<TrajectoryRow>, Vec<LoopRow>);
 
-/// One loop-closing mode's loops on MIT CSAIL against the corrected poses
+/// The loops of each loop-closing mode among `localizers` (one per
+/// [`modes`]) checked against `reference` (a pose per scan), named as the
+/// mode.
+fn check_loops(
+    config: &NamedConfig,
+    localizers: &[Localizer],
+    reference: &[Option<Pose2>],
+) -> Vec<LoopRow> {
+    modes(config)
+        .iter()
+        .zip(localizers)
+        .filter_map(|((name, _, _), runner)| {
+            let l = runner.loop_closing()?;
+            let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
+            Some(LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, reference)))
+        })
+        .collect()
+}
+
+/// One loop-closing run's loops against a log's corrected poses
 /// ([`LoopCheck`]; wrong: off by more than [`pcaline_eval::WRONG_LOOP_M`]
 /// or [`pcaline_eval::WRONG_LOOP_DEG`]).
 #[derive(Debug, Serialize)]
 pub struct LoopRow {
-    /// The mode.
+    /// The run: the mode, prefixed by the source on Intel.
     pub name: String,
     /// Loop edges standing at the end of the run.
     pub standing: usize,
@@ -466,7 +471,7 @@ pub struct LoopRow {
     pub switched_off: usize,
     /// Of those, wrong.
     pub switched_off_wrong: usize,
-    /// Loop edges with a keyframe too far from any corrected scan.
+    /// Loop edges with a keyframe that has no reference pose.
     pub unchecked: usize,
     /// Median and largest error of the standing loops, metres.
     pub standing_error_m: [f64; 2],
@@ -570,11 +575,12 @@ fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> 
 /// Each mode's pose at every record with `source` (one pose per record) as
 /// the localization source: at a scan, its aiding loop's output; between
 /// scans, the source's motion since the last scan composed onto it. With
-/// them, the loops of each loop-closing mode checked against the records'
-/// corrected poses (exact: the drift is added to them).
+/// them, the loops of each loop-closing mode checked against `reference`,
+/// the corrected pose of each scan (exact: the drift is added to them).
 fn intel_run(
     records: &[IntelRecord],
     source: &[Pose2],
+    reference: &[Option<Pose2>],
     config: &NamedConfig,
 ) -> Result<(Vec<Vec<Pose2>>, Vec<LoopRow>)> {
     let mut loops = runners(config)?;
@@ -619,19 +625,7 @@ fn intel_run(
             }
         }
     }
-    let corrected: Vec<Pose2> = records.iter().map(|r| r.pose).collect();
-    let reference: Vec<Option<Pose2>> =
-        at_scans(records, &corrected).into_iter().map(Some).collect();
-    let checks = modes(config)
-        .iter()
-        .zip(&loops)
-        .filter_map(|((name, _, _), runner)| {
-            let l = runner.loop_closing()?;
-            let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
-            Some(LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, &reference)))
-        })
-        .collect();
-    Ok((out, checks))
+    Ok((out, check_loops(config, &loops, reference)))
 }
 
 /// The relation metric of poses at the Intel records' times.
@@ -702,6 +696,8 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
             (model, source)
         })
         .collect();
+    let at_scan_reference: Vec<Option<Pose2>> =
+        at_scans(&records, &corrected).into_iter().map(Some).collect();
     // Every run on the thread pool at once, gathered in order: the log's own
     // poses, the seeded drift, then the grid's cells.
     let sources: Vec<&[Pose2]> = [&corrected[..], &drifted[..]]
@@ -710,7 +706,7 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
         .collect();
     let mut runs = sources
         .par_iter()
-        .map(|source| intel_run(&records, source, config))
+        .map(|source| intel_run(&records, source, &at_scan_reference, config))
         .collect::<Result<Vec<_>>>()?
         .into_iter();
     let (Some((own_runs, own_loops)), Some((drift_runs, drift_loops))) = (runs.next(), runs.next())
