@@ -13,7 +13,9 @@ use crate::{
 };
 use crate::{PoseWindow, WindowStep};
 use pcaline_fitting::Moments;
-use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2};
+use pcaline_geometry::{
+    ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2, Vector3,
+};
 use pcaline_mapping::{LineId, LineMap, LineStatus, MapConfig, MapLine, MatchGate};
 
 /// A detected line in the sensor frame with the moments of its points.
@@ -462,8 +464,9 @@ impl Aiding {
         (pose, report)
     }
 
-    /// The estimator's step: gate, joint check, iterated update, innovation
-    /// test. Returns the pose, the report and whether the scan's lines may
+    /// The estimator's step: gate, joint check (and, with
+    /// [`crate::EstimatorConfig::recovery`], a new prediction when fewer
+    /// than two matches agree), iterated update, innovation test. Returns the pose, the report and whether the scan's lines may
     /// update the map (not after a refused correction).
     fn estimate(
         &mut self,
@@ -477,12 +480,17 @@ impl Aiding {
             report.fallback = Some(Fallback::NoMatches);
             return (predicted, report, true);
         }
-        let gated = self.gate(&predicted, &predicted_cov, lines, &mut report);
-        if gated.is_empty() {
-            report.fallback = Some(Fallback::NoMatches);
-            return (predicted, report, true);
+        let (mut predicted, mut predicted_cov) = (predicted, predicted_cov);
+        let mut consistent = self.associate(&predicted, &predicted_cov, lines, &mut report);
+        if consistent.len() < 2
+            && let Some((pose, cov)) = self.recover(&predicted, &predicted_cov, lines)
+        {
+            report = StepReport { recovery: Some(predicted.between(&pose)), ..Default::default() };
+            self.associations.clear();
+            (predicted, predicted_cov) = (pose, cov);
+            self.covariance = cov;
+            consistent = self.associate(&predicted, &predicted_cov, lines, &mut report);
         }
-        let consistent = self.check_jointly(gated, &predicted_cov, lines, &mut report);
         if consistent.len() < self.config.estimator.min_matches.max(1) {
             report.fallback = Some(Fallback::NoMatches);
             return (predicted, report, true);
@@ -502,6 +510,65 @@ impl Aiding {
             return (predicted, report, true);
         };
         self.accept(update, &predicted, &predicted_cov, &consistent, lines, report)
+    }
+
+    /// Steps 1 and 2 of [`Aiding::estimate`]: the gated matches that agree
+    /// with one another.
+    fn associate(
+        &mut self,
+        predicted: &Pose2,
+        predicted_cov: &Matrix3<f64>,
+        lines: &[impl ObservedLine],
+        report: &mut StepReport,
+    ) -> Vec<(usize, usize)> {
+        let gated = self.gate(predicted, predicted_cov, lines, report);
+        if gated.is_empty() {
+            return Vec::new();
+        }
+        self.check_jointly(gated, predicted_cov, lines, report)
+    }
+
+    /// The recovery of [`EstimatorConfig::recovery`]: a new prediction from
+    /// the scan's lines aligned with the confirmed map lines around the
+    /// source's, its covariance the predicted one widened by the change in
+    /// each coordinate (so the change is about one standard deviation).
+    fn recover(
+        &self,
+        predicted: &Pose2,
+        predicted_cov: &Matrix3<f64>,
+        lines: &[impl ObservedLine],
+    ) -> Option<(Pose2, Matrix3<f64>)> {
+        let r = self.config.estimator.recovery?;
+        if lines.len() < 2 {
+            return None;
+        }
+        let here = Point2::new(predicted.x(), predicted.y());
+        let map: Vec<LineSegment> = self
+            .map
+            .lines_near(&here, r.map_radius_m)
+            .into_iter()
+            .map(|i| &self.map.lines()[i])
+            .filter(|m| m.is_confirmed())
+            .map(|m| m.line)
+            .collect();
+        let seen: Vec<LineSegment> = lines.iter().map(|l| *l.line()).collect();
+        let found = crate::recover(predicted, &seen, &map, &r)?;
+        let change = predicted.between(&found.world_from_sensor);
+        // Only what the gates could not reach: a change the predicted
+        // covariance already allows is the update's to make.
+        let dx = Vector3::new(
+            found.world_from_sensor.x() - predicted.x(),
+            found.world_from_sensor.y() - predicted.y(),
+            change.heading(),
+        );
+        let d2 = predicted_cov.try_inverse().map_or(f64::INFINITY, |inv| dx.dot(&(inv * dx)));
+        if d2.is_nan() || d2 < r.min_change_chi2 {
+            return None;
+        }
+        let shift2 = change.x().powi(2) + change.y().powi(2);
+        let widened = predicted_cov
+            + Matrix3::from_diagonal(&Vector3::new(shift2, shift2, change.heading().powi(2)));
+        Some((found.world_from_sensor, widened))
     }
 
     /// Step 1 of [`Aiding::estimate`]: each line's best map line within
@@ -650,7 +717,9 @@ impl Aiding {
             .collect();
         report.heading_correction_rad =
             pcaline_geometry::wrap_angle(update.pose.heading() - predicted.heading());
-        if let Some(c) = e.calibration {
+        // A recovered step's correction is the source's failure, not its
+        // calibration error: the calibration does not learn from it.
+        if let Some(c) = e.calibration.filter(|_| report.recovery.is_none()) {
             // Known defect (docs/accuracy.md): the translation correction is
             // still zero here, so the speed scale does not learn.
             self.calibration.observe(
@@ -872,6 +941,7 @@ impl Default for StepReport {
             translation_correction_m: Vector2::zeros(),
             constrained_directions: 0,
             fallback: None,
+            recovery: None,
         }
     }
 }
@@ -1010,6 +1080,36 @@ mod tests {
         }
         // Confirmed from the third scan on, the walls correct the pose.
         assert_eq!(a.associations().iter().filter(|m| m.outcome == MatchOutcome::Used).count(), 3);
+    }
+
+    #[test]
+    fn recovery_undoes_a_turn_the_source_got_wrong_by_20_degrees() {
+        let mut config = AidingConfig::estimator();
+        config.estimator.recovery = Some(crate::Recovery::standard());
+        let mut with = aiding(config);
+        let mut without = estimator();
+        let truth = Pose2::new(0.2, 0.1, 0.0);
+        for k in 0..5 {
+            with.step_at(0.1 * k as f64, &truth, &room_seen_from(&truth));
+            without.step_at(0.1 * k as f64, &truth, &room_seen_from(&truth));
+        }
+        // The sensor stays; the source says it turned 20° (a lagging
+        // odometry after a fast turn back and forth).
+        let source = Pose2::new(0.2, 0.1, 20f64.to_radians());
+        let (pose, report) = with.step_at(0.5, &source, &room_seen_from(&truth));
+        let change = report.recovery.expect("recovered");
+        assert!((change.heading() + 20f64.to_radians()).abs() < 0.01, "{change:?}");
+        assert!((pose.heading() - truth.heading()).abs() < 0.2f64.to_radians(), "{pose:?}");
+        assert!(report.matches >= 2, "{report:?}");
+        // Without recovery the gates hold nothing and the source's turn stays.
+        let (pose, report) = without.step_at(0.5, &source, &room_seen_from(&truth));
+        assert!(report.recovery.is_none() && report.matches == 0, "{report:?}");
+        assert!((pose.heading() - source.heading()).abs() < 1e-9);
+        // The source's next increment is right (no motion): nothing to
+        // recover.
+        let (pose, report) = with.step_at(0.6, &source, &room_seen_from(&truth));
+        assert!(report.recovery.is_none(), "{report:?}");
+        assert!((pose.heading() - truth.heading()).abs() < 0.2f64.to_radians());
     }
 
     #[test]

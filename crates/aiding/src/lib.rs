@@ -38,6 +38,7 @@ mod motion_noise;
 mod pose_graph;
 mod pose_update;
 mod pose_window;
+mod recovery;
 mod source_calibration;
 mod translation;
 
@@ -45,7 +46,7 @@ pub use aiding::{Aiding, Association, MatchOutcome, ObservedLine, SensorLine};
 
 pub use heading::{MIN_D_RHO_M, heading_correction, rotate_step, weighted_offset};
 pub use line_alignment::{
-    Alignment, AlignmentConfig, AlignmentPrior, align_lines, see_through_fraction,
+    Alignment, AlignmentConfig, AlignmentPrior, align_lines, laid_length, see_through_fraction,
 };
 pub use line_measurement::{LineMeasurement, MeasurementNoise, measure};
 pub use localizer::Localizer;
@@ -58,10 +59,11 @@ pub use pose_graph::{
 };
 pub use pose_update::{PoseUpdate, gate_distance2, iterated_update, joint_consistent};
 pub use pose_window::{MeasureAt, PoseWindow, WindowStep};
+pub use recovery::{Recovered, Recovery, recover};
 pub use source_calibration::{CalibrationConfig, SourceCalibration};
 pub use translation::{NormalConstraint, TranslationFix, solve_translation};
 
-use pcaline_geometry::{ConfigError, Matrix3, Vector2};
+use pcaline_geometry::{ConfigError, Matrix3, Pose2, Vector2};
 
 /// Which corrections are applied.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -158,6 +160,17 @@ pub struct EstimatorConfig {
     pub max_source_step_m: f64,
     /// A source turn larger than this between two scans is a jump, radians.
     pub max_source_turn_rad: f64,
+    /// When fewer than two matches agree, the scan's lines are aligned with
+    /// the confirmed map lines around the prediction without its gates
+    /// ([`recover`]); a clearly better placement that the predicted
+    /// covariance does not allow ([`Recovery::min_change_chi2`]) becomes
+    /// the prediction, its covariance widened to cover the change, and the
+    /// step's correction does not teach the calibration. `None` (the
+    /// default): the source's prediction is kept whatever the scan says.
+    /// Measured in `docs/accuracy.md` ("Recovery from a source far off"):
+    /// it pulls a drifting source back better, but moves the results on MIT
+    /// CSAIL's raw odometry unpredictably.
+    pub recovery: Option<Recovery>,
 }
 
 /// The largest accelerations of a sensor carried without a motion source
@@ -264,6 +277,7 @@ impl EstimatorConfig {
             max_gate_offset_m: 1.0,
             max_source_step_m: 5.0,
             max_source_turn_rad: std::f64::consts::FRAC_PI_2,
+            recovery: None,
         }
     }
 
@@ -318,6 +332,9 @@ impl EstimatorConfig {
                 a.max_scale,
                 "must be finite and >= 1",
             )?;
+        }
+        if let Some(r) = self.recovery {
+            r.validate("aiding.estimator.recovery")?;
         }
         if let Some(c) = self.calibration {
             for (field, v) in [
@@ -552,4 +569,8 @@ pub struct StepReport {
     pub constrained_directions: usize,
     /// Why the correction fell back, if it did.
     pub fallback: Option<Fallback>,
+    /// When the source's prediction was replaced by
+    /// [`EstimatorConfig::recovery`]: the change, `predicted_from_recovered`
+    /// (the corrections above are then from the recovered prediction).
+    pub recovery: Option<Pose2>,
 }

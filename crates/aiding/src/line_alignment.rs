@@ -49,7 +49,7 @@ pub struct AlignmentConfig {
 impl AlignmentConfig {
     /// Defaults for indoor scans: pairs at least 30° apart, matches within 3°
     /// and 10 cm overlapping 20 cm, the 12 longest lines, corners within 2 m.
-    pub fn standard() -> Self {
+    pub const fn standard() -> Self {
         AlignmentConfig {
             min_pair_angle_rad: 30f64.to_radians(),
             pair_angle_tolerance_rad: 3f64.to_radians(),
@@ -417,6 +417,21 @@ pub fn align_lines(
         .map(|(s, _)| *s)
         .fold(0.0, f64::max);
     Some(a)
+}
+
+/// The length of `current`'s walls that `candidate_from_current` lays over
+/// `candidate`'s under the matching rule of `config` (each current line's
+/// best overlap, at most its own length), metres: the score
+/// [`align_lines`] gives a hypothesis. Degenerate lines count nothing.
+pub fn laid_length(
+    current: &[LineSegment],
+    candidate: &[LineSegment],
+    candidate_from_current: &Pose2,
+    config: &AlignmentConfig,
+) -> f64 {
+    let cur: Vec<Seg> = current.iter().filter_map(Seg::of).collect();
+    let cand: Vec<Seg> = candidate.iter().filter_map(Seg::of).collect();
+    matches(&cur, &cand, candidate_from_current, config, &mut Vec::new())
 }
 
 /// Two hypotheses are distinct beyond this distance, metres ...

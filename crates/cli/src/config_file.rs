@@ -387,9 +387,10 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 17] = [
+    const OPTIONAL: [&str; 18] = [
         "map.lifecycle",
         "aiding.estimator.window",
+        "aiding.estimator.recovery",
         "aiding.estimator.tentative_variance_scale",
         "aiding.estimator.adaptation",
         "aiding.estimator.measurement_adaptation",
@@ -602,6 +603,27 @@ mod tests {
             write("off.toml", "preset = \"default\"\n[detector]\nnoise_estimation = false\n");
         let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
         assert_eq!(c.detector, Config::noise_aware(RangeNoise::utm30lx()));
+        // The estimator's recovery is off in the presets; a file turns it
+        // on with every field, and a bad value names its path.
+        let recovery = |runner_up: f64| {
+            format!(
+                "preset = \"default\"\n[aiding.estimator.recovery]\nmap_radius_m = 15.0\n\
+                 radius_m = 1.0\nmax_rotation_rad = 0.5\nmin_gain_m = 1.0\n\
+                 min_matched_fraction = 0.5\nmin_weakest_direction_m = 0.5\nmax_rms_m = 0.04\n\
+                 max_runner_up = {runner_up}\nmin_change_chi2 = 100.0\n\
+                 [aiding.estimator.recovery.alignment]\nmin_pair_angle_rad = 0.5\n\
+                 pair_angle_tolerance_rad = 0.05\nmatch_angle_rad = 0.05\n\
+                 match_distance_m = 0.1\nmin_overlap_m = 0.2\nhypothesis_lines = 12\n\
+                 max_corner_distance_m = 2.0\nrefine_iterations = 5\n"
+            )
+        };
+        assert_eq!(resolve("default", 0.01).unwrap().aiding.estimator.recovery, None);
+        let path = write("recovery.toml", &recovery(0.7));
+        let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
+        assert_eq!(c.aiding.estimator.recovery.map(|r| r.max_runner_up), Some(0.7));
+        let path = write("bad-recovery.toml", &recovery(1.5));
+        let e = resolve(path.to_str().unwrap(), 0.01).unwrap_err().to_string();
+        assert!(e.contains("aiding.estimator.recovery.max_runner_up"), "{e}");
         // The paper's map has no offset gate; a file may add one.
         let path = write("paper.json", r#"{"preset": "paper", "map": {"max_offset_m": 0.1}}"#);
         assert_eq!(resolve(path.to_str().unwrap(), 0.01).unwrap().map.max_offset_m, Some(0.1));

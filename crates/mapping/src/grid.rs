@@ -82,13 +82,26 @@ impl Grid {
     }
 
     /// Calls `f` for each segment registered in a cell within `radius_m` of
-    /// `p` (a segment may be reported more than once).
+    /// `p` (a segment may be reported more than once). Nothing for a
+    /// non-finite point; a radius wider than the occupied cells costs no more
+    /// than visiting all of them.
     pub(crate) fn for_each_near(&self, p: &Point2<f64>, radius_m: f64, mut f: impl FnMut(u32)) {
         if !(p.x.is_finite() && p.y.is_finite()) {
             return;
         }
         let (lo, hi) =
             (self.key(p.x - radius_m, p.y - radius_m), self.key(p.x + radius_m, p.y + radius_m));
+        // A radius spanning more cells than are occupied: visit the occupied
+        // ones instead of walking a huge empty window.
+        let window =
+            (i64::from(hi.0) - i64::from(lo.0) + 1) * (i64::from(hi.1) - i64::from(lo.1) + 1);
+        if window > self.cells.len() as i64 {
+            let inside = |k: &Key| (lo.0..=hi.0).contains(&k.0) && (lo.1..=hi.1).contains(&k.1);
+            self.cells.iter().filter(|(k, _)| inside(k)).for_each(|(_, ids)| {
+                ids.iter().for_each(|&id| f(id));
+            });
+            return;
+        }
         for i in lo.0..=hi.0 {
             for j in lo.1..=hi.1 {
                 if let Some(ids) = self.cells.get(&(i, j)) {
@@ -116,6 +129,20 @@ mod tests {
         assert!(near(&g, 9.5, 0.8).contains(&7));
         assert!(near(&g, 5.0, 5.0).is_empty());
         assert!(near(&g, f64::NAN, 0.0).is_empty());
+    }
+
+    #[test]
+    fn a_huge_radius_visits_the_occupied_cells_once() {
+        let mut g = Grid::new(1.0);
+        g.insert(3, &Point2::new(0.0, 0.0), &Point2::new(2.5, 0.0));
+        g.insert(4, &Point2::new(100.0, 50.0), &Point2::new(100.5, 50.0));
+        let mut wide = vec![];
+        g.for_each_near(&Point2::new(0.0, 0.0), 1e12, |id| wide.push(id));
+        wide.sort_unstable();
+        assert_eq!(wide, vec![3, 3, 3, 4]);
+        let mut narrow = vec![];
+        g.for_each_near(&Point2::new(0.0, 0.0), 10.0, |id| narrow.push(id));
+        assert_eq!(narrow, vec![3, 3, 3]);
     }
 
     #[test]

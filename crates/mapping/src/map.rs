@@ -372,6 +372,23 @@ impl LineMap {
         best
     }
 
+    /// The indices (into [`LineMap::lines`]) of the map lines that pass
+    /// within about `radius_m` of `point` (world frame): every line through
+    /// a grid cell that the square of half-side `radius_m` around `point`
+    /// touches, so a few lines up to a cell farther are included. Ascending,
+    /// each once. Empty for a non-finite point or a radius that is negative
+    /// or not finite.
+    pub fn lines_near(&self, point: &Point2<f64>, radius_m: f64) -> Vec<usize> {
+        if !(radius_m >= 0.0 && radius_m.is_finite()) {
+            return Vec::new();
+        }
+        let mut found: Vec<usize> = Vec::new();
+        self.grid.for_each_near(point, radius_m, |id| found.push(id as usize));
+        found.sort_unstable();
+        found.dedup();
+        found
+    }
+
     /// Calls `f` once for every map line that `line` (world frame, seen
     /// from `viewpoint`) matches under `gate` (and the side rule of
     /// [`MapConfig::sided`]), with its metrics. Nothing for a non-finite
