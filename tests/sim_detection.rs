@@ -34,12 +34,7 @@ fn noiseless_corridor_runs_are_all_detected() {
                 sensor_from_world.transform_point(&wall.a),
                 sensor_from_world.transform_point(&wall.b),
             );
-            let truth = pcaline::LineSegment::through(
-                Point2::from((a.coords + b.coords) / 2.0),
-                b - a,
-                a,
-                b,
-            );
+            let truth = pcaline::LineSegment::between(a, b);
             // The part of the wall this run saw, in the sensor frame.
             let seen =
                 |beam: usize| sensor_from_world.transform_point(&frame.beams[beam].point.unwrap());

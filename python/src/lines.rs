@@ -126,8 +126,7 @@ impl PyLines {
                         "line {i}: start {a:?} and end {b:?} do not make a line"
                     )));
                 }
-                let mid = Point2::from((a.coords + b.coords) / 2.0);
-                Ok(LineSegment::through(mid, dir / norm, *a, *b))
+                Ok(LineSegment::between(*a, *b))
             })
             .collect::<PyResult<_>>()?;
         Ok(PyLines::segments(lines))

@@ -279,13 +279,10 @@ fn matches(
 /// use pcaline_aiding::{AlignmentConfig, align_lines};
 /// use pcaline_geometry::{LineSegment, Point2, Pose2};
 ///
-/// let seg = |p: Point2<f64>, q: Point2<f64>| {
-///     LineSegment::through(Point2::from((p.coords + q.coords) / 2.0), q - p, p, q)
-/// };
 /// let room = [
-///     seg(Point2::new(0.0, 0.0), Point2::new(4.0, 0.0)),
-///     seg(Point2::new(4.0, 0.0), Point2::new(4.0, 3.0)),
-///     seg(Point2::new(4.0, 3.0), Point2::new(1.0, 3.0)),
+///     LineSegment::between(Point2::new(0.0, 0.0), Point2::new(4.0, 0.0)),
+///     LineSegment::between(Point2::new(4.0, 0.0), Point2::new(4.0, 3.0)),
+///     LineSegment::between(Point2::new(4.0, 3.0), Point2::new(1.0, 3.0)),
 /// ];
 /// let shift = Pose2::new(0.5, -0.2, 0.1);
 /// let seen: Vec<_> = room.iter().map(|l| l.transformed(&shift.inverse())).collect();
@@ -563,8 +560,7 @@ mod tests {
     use super::*;
 
     fn seg(a: (f64, f64), b: (f64, f64)) -> LineSegment {
-        let (p, q) = (Point2::new(a.0, a.1), Point2::new(b.0, b.1));
-        LineSegment::through(Point2::from((p.coords + q.coords) / 2.0), q - p, p, q)
+        LineSegment::between(Point2::new(a.0, a.1), Point2::new(b.0, b.1))
     }
 
     /// An L-shaped room with a pillar.

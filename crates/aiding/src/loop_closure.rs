@@ -876,9 +876,8 @@ mod tests {
                 let (a, b) = (inv.transform_point(a), inv.transform_point(b));
                 let points: Vec<Point2<f64>> =
                     (0..=20).map(|k| a + (b - a) * (k as f64 / 20.0)).collect();
-                let mid = Point2::from((a.coords + b.coords) / 2.0);
                 SensorLine {
-                    line: LineSegment::through(mid, b - a, a, b),
+                    line: LineSegment::between(a, b),
                     moments: Moments::from_points(&points),
                 }
             })

@@ -147,13 +147,10 @@ pub struct Recovered {
 /// use pcaline_aiding::{Recovery, recover};
 /// use pcaline_geometry::{LineSegment, Point2, Pose2};
 ///
-/// let seg = |p: Point2<f64>, q: Point2<f64>| {
-///     LineSegment::through(Point2::from((p.coords + q.coords) / 2.0), q - p, p, q)
-/// };
 /// let room = [
-///     seg(Point2::new(-2.0, -2.0), Point2::new(4.0, -2.0)),
-///     seg(Point2::new(4.0, -2.0), Point2::new(4.0, 3.0)),
-///     seg(Point2::new(4.0, 3.0), Point2::new(-2.0, 3.0)),
+///     LineSegment::between(Point2::new(-2.0, -2.0), Point2::new(4.0, -2.0)),
+///     LineSegment::between(Point2::new(4.0, -2.0), Point2::new(4.0, 3.0)),
+///     LineSegment::between(Point2::new(4.0, 3.0), Point2::new(-2.0, 3.0)),
 /// ];
 /// // The sensor is at the origin; the source says it turned by 20°.
 /// let seen: Vec<_> = room.to_vec();
@@ -203,8 +200,7 @@ mod tests {
     use pcaline_geometry::Point2;
 
     fn seg(p: (f64, f64), q: (f64, f64)) -> LineSegment {
-        let (p, q) = (Point2::new(p.0, p.1), Point2::new(q.0, q.1));
-        LineSegment::through(Point2::from((p.coords + q.coords) / 2.0), q - p, p, q)
+        LineSegment::between(Point2::new(p.0, p.1), Point2::new(q.0, q.1))
     }
 
     fn room() -> Vec<LineSegment> {

@@ -233,8 +233,7 @@ mod tests {
     use pcaline_geometry::Vector2;
 
     fn seg(a: (f64, f64), b: (f64, f64)) -> LineSegment {
-        let (a, b) = (Point2::new(a.0, a.1), Point2::new(b.0, b.1));
-        LineSegment::through(Point2::from((a.coords + b.coords) / 2.0), b - a, a, b)
+        LineSegment::between(Point2::new(a.0, a.1), Point2::new(b.0, b.1))
     }
 
     fn truth() -> Vec<TrueWall> {

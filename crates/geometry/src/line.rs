@@ -69,6 +69,21 @@ impl LineSegment {
         }
     }
 
+    /// The segment from `start` to `end` (a wall drawn by its ends), through
+    /// their midpoint; statistics set to zero. Coincident ends give a
+    /// segment whose direction and Hessian form are NaN, as do non-finite
+    /// ones.
+    ///
+    /// ```
+    /// use pcaline_geometry::{LineSegment, Point2};
+    /// let wall = LineSegment::between(Point2::new(0.0, 1.0), Point2::new(4.0, 1.0));
+    /// assert!((wall.d() - 1.0).abs() < 1e-12 && (wall.length() - 4.0).abs() < 1e-12);
+    /// assert!(LineSegment::between(Point2::new(1.0, 1.0), Point2::new(1.0, 1.0)).d().is_nan());
+    /// ```
+    pub fn between(start: Point2<f64>, end: Point2<f64>) -> Self {
+        Self::through(Point2::from((start.coords + end.coords) / 2.0), end - start, start, end)
+    }
+
     /// A segment restored from its stored Hessian form (a saved map): the
     /// line `x cos(alpha) + y sin(alpha) = d` through `centroid`, from
     /// `start` to `end`, as given. `alpha` is wrapped; a negative `d` is
