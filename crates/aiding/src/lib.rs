@@ -287,29 +287,24 @@ impl EstimatorConfig {
         const P: &str = "aiding.estimator";
         self.motion.validate("aiding.estimator.motion")?;
         self.constant_velocity.validate("aiding.estimator.constant_velocity")?;
-        for (field, v) in [
-            ("measurement.alpha_floor_rad", self.measurement.alpha_floor_rad),
-            ("measurement.offset_floor_m", self.measurement.offset_floor_m),
-            ("measurement.line_variance_scale", self.measurement.line_variance_scale),
-            ("huber_k", self.huber_k),
-            ("gate_chi2", self.gate_chi2),
-            ("consensus_chi2", self.consensus_chi2),
-            ("innovation_chi2", self.innovation_chi2),
-            ("max_gate_alpha_rad", self.max_gate_alpha_rad),
-            ("max_gate_offset_m", self.max_gate_offset_m),
-            ("max_source_step_m", self.max_source_step_m),
-            ("max_acceleration.linear_m_s2", self.max_acceleration.linear_m_s2),
-            ("max_acceleration.angular_rad_s2", self.max_acceleration.angular_rad_s2),
-            ("max_source_turn_rad", self.max_source_turn_rad),
-        ] {
-            ConfigError::check_field(
-                v > 0.0 && v.is_finite(),
-                P,
-                field,
-                v,
-                "must be finite and > 0",
-            )?;
-        }
+        ConfigError::positive_fields(
+            P,
+            &[
+                ("measurement.alpha_floor_rad", self.measurement.alpha_floor_rad),
+                ("measurement.offset_floor_m", self.measurement.offset_floor_m),
+                ("measurement.line_variance_scale", self.measurement.line_variance_scale),
+                ("huber_k", self.huber_k),
+                ("gate_chi2", self.gate_chi2),
+                ("consensus_chi2", self.consensus_chi2),
+                ("innovation_chi2", self.innovation_chi2),
+                ("max_gate_alpha_rad", self.max_gate_alpha_rad),
+                ("max_gate_offset_m", self.max_gate_offset_m),
+                ("max_source_step_m", self.max_source_step_m),
+                ("max_acceleration.linear_m_s2", self.max_acceleration.linear_m_s2),
+                ("max_acceleration.angular_rad_s2", self.max_acceleration.angular_rad_s2),
+                ("max_source_turn_rad", self.max_source_turn_rad),
+            ],
+        )?;
         if let Some(a) = self.adaptation {
             ConfigError::check_field(
                 a.rate > 0.0 && a.rate <= 1.0,

@@ -78,19 +78,14 @@ impl AlignmentConfig {
                 "must be in (0, pi/2)",
             )?;
         }
-        for (name, v) in [
-            ("match_distance_m", self.match_distance_m),
-            ("min_overlap_m", self.min_overlap_m),
-            ("max_corner_distance_m", self.max_corner_distance_m),
-        ] {
-            ConfigError::check_field(
-                v > 0.0 && v.is_finite(),
-                prefix,
-                name,
-                v,
-                "must be finite and > 0",
-            )?;
-        }
+        ConfigError::positive_fields(
+            prefix,
+            &[
+                ("match_distance_m", self.match_distance_m),
+                ("min_overlap_m", self.min_overlap_m),
+                ("max_corner_distance_m", self.max_corner_distance_m),
+            ],
+        )?;
         ConfigError::check_field(
             (2..=64).contains(&self.hypothesis_lines),
             prefix,

@@ -170,30 +170,25 @@ impl LoopClosureConfig {
     /// Checks every value; errors name `loop_closure.<field>`.
     pub fn validate(&self) -> Result<(), ConfigError> {
         const P: &str = "loop_closure";
-        for (name, v) in [
-            ("keyframe_distance_m", self.keyframe_distance_m),
-            ("keyframe_turn_rad", self.keyframe_turn_rad),
-            ("min_loop_path_m", self.min_loop_path_m),
-            ("search_radius_m", self.search_radius_m),
-            ("max_search_radius_m", self.max_search_radius_m),
-            ("search_rotation_rad", self.search_rotation_rad),
-            ("min_matched_length_m", self.min_matched_length_m),
-            ("min_weakest_direction_m", self.min_weakest_direction_m),
-            ("max_rms_m", self.max_rms_m),
-            ("loop_floor_m", self.loop_floor_m),
-            ("loop_floor_rad", self.loop_floor_rad),
-            ("sequential_variance_scale", self.sequential_variance_scale),
-            ("confirm_distance_m", self.confirm_distance_m),
-            ("confirm_rotation_rad", self.confirm_rotation_rad),
-        ] {
-            ConfigError::check_field(
-                v > 0.0 && v.is_finite(),
-                P,
-                name,
-                v,
-                "must be finite and > 0",
-            )?;
-        }
+        ConfigError::positive_fields(
+            P,
+            &[
+                ("keyframe_distance_m", self.keyframe_distance_m),
+                ("keyframe_turn_rad", self.keyframe_turn_rad),
+                ("min_loop_path_m", self.min_loop_path_m),
+                ("search_radius_m", self.search_radius_m),
+                ("max_search_radius_m", self.max_search_radius_m),
+                ("search_rotation_rad", self.search_rotation_rad),
+                ("min_matched_length_m", self.min_matched_length_m),
+                ("min_weakest_direction_m", self.min_weakest_direction_m),
+                ("max_rms_m", self.max_rms_m),
+                ("loop_floor_m", self.loop_floor_m),
+                ("loop_floor_rad", self.loop_floor_rad),
+                ("sequential_variance_scale", self.sequential_variance_scale),
+                ("confirm_distance_m", self.confirm_distance_m),
+                ("confirm_rotation_rad", self.confirm_rotation_rad),
+            ],
+        )?;
         ConfigError::check_field(
             self.search_sigmas >= 0.0 && self.search_sigmas.is_finite(),
             P,

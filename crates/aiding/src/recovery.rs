@@ -74,22 +74,17 @@ impl Recovery {
 
     /// Checks every field; errors name `prefix.field`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        for (name, v) in [
-            ("map_radius_m", self.map_radius_m),
-            ("radius_m", self.radius_m),
-            ("max_rotation_rad", self.max_rotation_rad),
-            ("min_gain_m", self.min_gain_m),
-            ("max_rms_m", self.max_rms_m),
-            ("min_change_chi2", self.min_change_chi2),
-        ] {
-            ConfigError::check_field(
-                v > 0.0 && v.is_finite(),
-                prefix,
-                name,
-                v,
-                "must be finite and > 0",
-            )?;
-        }
+        ConfigError::positive_fields(
+            prefix,
+            &[
+                ("map_radius_m", self.map_radius_m),
+                ("radius_m", self.radius_m),
+                ("max_rotation_rad", self.max_rotation_rad),
+                ("min_gain_m", self.min_gain_m),
+                ("max_rms_m", self.max_rms_m),
+                ("min_change_chi2", self.min_change_chi2),
+            ],
+        )?;
         for (name, v) in [
             ("min_matched_fraction", self.min_matched_fraction),
             ("max_runner_up", self.max_runner_up),

@@ -47,6 +47,22 @@ impl ConfigError {
         Self::check(value > 0.0 && value.is_finite(), field, value, "must be finite and > 0")
     }
 
+    /// Each `(name, value)` of `fields` must be finite and > 0; the first
+    /// that is not gives the error, naming `prefix.name`.
+    ///
+    /// ```
+    /// use pcaline_geometry::ConfigError;
+    /// let fields = [("radius_m", 1.0), ("max_rms_m", f64::NAN), ("min_gain_m", -1.0)];
+    /// let e = ConfigError::positive_fields("recovery", &fields).unwrap_err();
+    /// assert!(e.to_string().contains("`recovery.max_rms_m`"));
+    /// assert!(ConfigError::positive_fields("recovery", &fields[..1]).is_ok());
+    /// ```
+    pub fn positive_fields(prefix: &str, fields: &[(&str, f64)]) -> Result<(), ConfigError> {
+        fields.iter().try_for_each(|&(name, v)| {
+            Self::check_field(v > 0.0 && v.is_finite(), prefix, name, v, "must be finite and > 0")
+        })
+    }
+
     /// `value` must be finite and >= 0.
     pub fn non_negative(field: &'static str, value: f64) -> Result<(), ConfigError> {
         Self::check(value >= 0.0 && value.is_finite(), field, value, "must be finite and >= 0")
