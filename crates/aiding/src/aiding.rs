@@ -466,8 +466,9 @@ impl Aiding {
 
     /// The estimator's step: gate, joint check (and, with
     /// [`crate::EstimatorConfig::recovery`], a new prediction when fewer
-    /// than two matches agree), iterated update, innovation test. Returns the pose, the report and whether the scan's lines may
-    /// update the map (not after a refused correction).
+    /// than two matches agree), iterated update, innovation test. Returns
+    /// the pose, the report and whether the scan's lines may update the map
+    /// (not after a refused correction).
     fn estimate(
         &mut self,
         predicted: Pose2,
