@@ -722,6 +722,23 @@ mod tests {
     }
 
     #[test]
+    fn lines_near_a_point_come_from_the_grid_each_once() {
+        let mut map = LineMap::new(MapConfig::default()).unwrap();
+        for (x, y0, y1) in [(3.0, 0.0, 6.0), (40.0, 0.0, 1.0), (-5.0, -1.0, 1.0)] {
+            let (l, m) = wall(x, y0, y1);
+            map.insert(&l, &m);
+        }
+        // The first wall spans three cells of 2 m: still listed once.
+        assert_eq!(map.lines_near(&Point2::new(0.0, 0.0), 6.0), vec![0, 2]);
+        assert_eq!(map.lines_near(&Point2::new(40.0, 0.5), 1.0), vec![1]);
+        assert_eq!(map.lines_near(&Point2::new(0.0, 0.0), 1e9), vec![0, 1, 2]);
+        assert!(map.lines_near(&Point2::new(20.0, 20.0), 3.0).is_empty());
+        assert!(map.lines_near(&Point2::new(f64::NAN, 0.0), 6.0).is_empty());
+        assert!(map.lines_near(&Point2::new(0.0, 0.0), -1.0).is_empty());
+        assert!(map.lines_near(&Point2::new(0.0, 0.0), f64::INFINITY).is_empty());
+    }
+
+    #[test]
     fn refined_map_refits_from_all_points() {
         let mut map = LineMap::new(MapConfig::default()).unwrap();
         let (a, ma) = wall(3.0, 0.0, 1.0);
