@@ -13,9 +13,7 @@ use crate::{
 };
 use crate::{PoseWindow, WindowStep};
 use pcaline_fitting::Moments;
-use pcaline_geometry::{
-    ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2, Vector3,
-};
+use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2};
 use pcaline_mapping::{LineId, LineMap, LineStatus, MapConfig, MapLine, MatchGate};
 
 /// A detected line in the sensor frame with the moments of its points.
@@ -529,10 +527,9 @@ impl Aiding {
         self.check_jointly(gated, predicted_cov, lines, report)
     }
 
-    /// The recovery of [`EstimatorConfig::recovery`]: a new prediction from
-    /// the scan's lines aligned with the confirmed map lines around the
-    /// source's, its covariance the predicted one widened by the change in
-    /// each coordinate (so the change is about one standard deviation).
+    /// The recovery of [`EstimatorConfig::recovery`] ([`crate::recover`])
+    /// against the confirmed map lines around the prediction: the new
+    /// prediction and its widened covariance.
     fn recover(
         &self,
         predicted: &Pose2,
@@ -553,23 +550,8 @@ impl Aiding {
             .map(|m| m.line)
             .collect();
         let seen: Vec<LineSegment> = lines.iter().map(|l| *l.line()).collect();
-        let found = crate::recover(predicted, &seen, &map, &r)?;
-        let change = predicted.between(&found.world_from_sensor);
-        // Only what the gates could not reach: a change the predicted
-        // covariance already allows is the update's to make.
-        let dx = Vector3::new(
-            found.world_from_sensor.x() - predicted.x(),
-            found.world_from_sensor.y() - predicted.y(),
-            change.heading(),
-        );
-        let d2 = predicted_cov.try_inverse().map_or(f64::INFINITY, |inv| dx.dot(&(inv * dx)));
-        if d2.is_nan() || d2 < r.min_change_chi2 {
-            return None;
-        }
-        let shift2 = change.x().powi(2) + change.y().powi(2);
-        let widened = predicted_cov
-            + Matrix3::from_diagonal(&Vector3::new(shift2, shift2, change.heading().powi(2)));
-        Some((found.world_from_sensor, widened))
+        let found = crate::recover(predicted, predicted_cov, &seen, &map, &r)?;
+        Some((found.world_from_sensor, found.covariance))
     }
 
     /// Step 1 of [`Aiding::estimate`]: each line's best map line within

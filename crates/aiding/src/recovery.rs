@@ -13,7 +13,7 @@
 //! the prediction does, constrains both directions and is not ambiguous.
 
 use crate::{Alignment, AlignmentConfig, AlignmentPrior, align_lines, laid_length};
-use pcaline_geometry::{ConfigError, LineSegment, Pose2};
+use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Pose2, Vector3};
 
 /// Tuning of [`recover`] (`aiding.estimator.recovery` in a configuration
 /// file).
@@ -42,10 +42,10 @@ pub struct Recovery {
     /// and no placement at least 0.5 m or 5° away laying more than this
     /// fraction of its length (repeated structure).
     pub max_runner_up: f64,
-    /// The estimator takes the new prediction only when its change is at
-    /// least this squared Mahalanobis distance from the source's under the
-    /// predicted covariance (three degrees of freedom): beyond the gates.
-    /// [`recover`] itself does not use it.
+    /// The new prediction is taken only when its change is at least this
+    /// squared Mahalanobis distance from the source's under the predicted
+    /// covariance (three degrees of freedom): beyond the gates, since a
+    /// change the covariance allows is the update's to make.
     pub min_change_chi2: f64,
     /// The alignment's hypotheses and matching rule.
     pub alignment: AlignmentConfig,
@@ -55,8 +55,8 @@ impl Recovery {
     /// Map lines within 15 m; a new prediction at most 1 m and 30° from the
     /// source's, laying at least 1 m more wall and half the scan's line
     /// length, with 0.5 m of wall across its weakest direction, an rms of
-    /// at most 4 cm and no runner-up above 0.7 of its length; the estimator
-    /// takes it only 10 standard deviations (chi² 100) from the source's.
+    /// at most 4 cm and no runner-up above 0.7 of its length, taken only 10
+    /// standard deviations (chi² 100) from the source's.
     pub const fn standard() -> Self {
         Recovery {
             map_radius_m: 15.0,
@@ -119,6 +119,10 @@ impl Default for Recovery {
 pub struct Recovered {
     /// The new prediction of the sensor's pose.
     pub world_from_sensor: Pose2,
+    /// Its covariance, `(x, y, heading)`: the predicted one widened by the
+    /// change in each coordinate, so the change is about one standard
+    /// deviation.
+    pub covariance: Matrix3<f64>,
     /// The alignment of the scan's lines with the map, in the frame of the
     /// source's prediction (`candidate_from_current` is
     /// `predicted_from_sensor`).
@@ -129,10 +133,13 @@ pub struct Recovered {
 
 /// A new prediction of the sensor's pose from the scan's `lines` (sensor
 /// frame) and the `map` lines near the prediction (world frame), when the
-/// source's `predicted` pose is clearly wrong; `None` when it is not, or
-/// when the scan cannot say better (fewer than two usable lines in either
-/// set, no hypothesis within the bound, too little wall laid, one
-/// direction unconstrained, a large residual, or a runner-up placement).
+/// source's `predicted` pose (covariance `predicted_cov`, `(x, y,
+/// heading)`) is clearly wrong; `None` when it is not, or when the scan
+/// cannot say better (fewer than two usable lines in either set, no
+/// hypothesis within the bound, too little wall laid, one direction
+/// unconstrained, a large residual, a runner-up placement, or a change
+/// within [`Recovery::min_change_chi2`]; a singular covariance allows no
+/// change, so any clear one is taken).
 ///
 /// The prediction's own placement is scored as a hypothesis, so a right
 /// prediction is kept; only a placement that lays
@@ -140,7 +147,7 @@ pub struct Recovered {
 ///
 /// ```
 /// use pcaline_aiding::{Recovery, recover};
-/// use pcaline_geometry::{LineSegment, Point2, Pose2};
+/// use pcaline_geometry::{LineSegment, Matrix3, Point2, Pose2, Vector3};
 ///
 /// let room = [
 ///     LineSegment::between(Point2::new(-2.0, -2.0), Point2::new(4.0, -2.0)),
@@ -150,14 +157,17 @@ pub struct Recovered {
 /// // The sensor is at the origin; the source says it turned by 20°.
 /// let seen: Vec<_> = room.to_vec();
 /// let predicted = Pose2::new(0.1, 0.0, 20f64.to_radians());
-/// let r = recover(&predicted, &seen, &room, &Recovery::standard()).unwrap();
+/// // The source claims 1 cm and 0.6° (one standard deviation).
+/// let cov = Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 1e-4));
+/// let r = recover(&predicted, &cov, &seen, &room, &Recovery::standard()).unwrap();
 /// assert!(r.world_from_sensor.heading().abs() < 1e-6);
 /// assert!(r.world_from_sensor.x().abs() < 1e-6);
 /// // A right prediction is kept.
-/// assert!(recover(&Pose2::identity(), &seen, &room, &Recovery::standard()).is_none());
+/// assert!(recover(&Pose2::identity(), &cov, &seen, &room, &Recovery::standard()).is_none());
 /// ```
 pub fn recover(
     predicted: &Pose2,
+    predicted_cov: &Matrix3<f64>,
     lines: &[LineSegment],
     map: &[LineSegment],
     config: &Recovery,
@@ -182,17 +192,35 @@ pub fn recover(
         && a.rms_m <= config.max_rms_m
         && a.runner_up_length_m <= config.max_runner_up * a.matched_length_m;
     let world_from_sensor = predicted.compose(&t);
-    (better && world_from_sensor.is_finite()).then_some(Recovered {
-        world_from_sensor,
-        alignment: a,
-        laid_at_prediction_m: laid,
-    })
+    if !(better && world_from_sensor.is_finite()) {
+        return None;
+    }
+    // The change as the prediction sees it (the composed pose's heading is
+    // wrapped, so it is taken back from it rather than from `t`).
+    let change = predicted.between(&world_from_sensor);
+    let in_world = Vector3::new(
+        world_from_sensor.x() - predicted.x(),
+        world_from_sensor.y() - predicted.y(),
+        change.heading(),
+    );
+    let d2 =
+        predicted_cov.try_inverse().map_or(f64::INFINITY, |inv| in_world.dot(&(inv * in_world)));
+    if d2.is_nan() || d2 < config.min_change_chi2 {
+        return None;
+    }
+    let shift2 = change.x().powi(2) + change.y().powi(2);
+    let covariance = predicted_cov
+        + Matrix3::from_diagonal(&Vector3::new(shift2, shift2, change.heading().powi(2)));
+    Some(Recovered { world_from_sensor, covariance, alignment: a, laid_at_prediction_m: laid })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use pcaline_geometry::Point2;
+
+    /// A source that claims 1 cm and 0.6° (one standard deviation).
+    const TIGHT: Matrix3<f64> = Matrix3::new(1e-4, 0.0, 0.0, 0.0, 1e-4, 0.0, 0.0, 0.0, 1e-4);
 
     fn seg(p: (f64, f64), q: (f64, f64)) -> LineSegment {
         LineSegment::between(Point2::new(p.0, p.1), Point2::new(q.0, q.1))
@@ -214,7 +242,8 @@ mod tests {
     fn a_source_off_by_a_fast_turn_is_recovered() {
         let truth = Pose2::new(0.5, 0.3, 0.4);
         let predicted = Pose2::new(0.8, 0.1, 0.4 - 25f64.to_radians());
-        let r = recover(&predicted, &seen_from(&truth), &room(), &Recovery::standard()).unwrap();
+        let r = recover(&predicted, &TIGHT, &seen_from(&truth), &room(), &Recovery::standard())
+            .unwrap();
         let e = truth.between(&r.world_from_sensor);
         assert!(e.x().hypot(e.y()) < 1e-6 && e.heading().abs() < 1e-6, "{e:?}");
         assert!(r.alignment.matched_length_m > r.laid_at_prediction_m + 1.0);
@@ -224,19 +253,24 @@ mod tests {
     fn beyond_the_bound_or_in_a_corridor_nothing_is_recovered() {
         let truth = Pose2::new(0.5, 0.3, 0.4);
         let far = Pose2::new(0.5, 0.3, 0.4 - 45f64.to_radians());
-        assert!(recover(&far, &seen_from(&truth), &room(), &Recovery::standard()).is_none());
+        assert!(
+            recover(&far, &TIGHT, &seen_from(&truth), &room(), &Recovery::standard()).is_none()
+        );
         let corridor = vec![seg((-10.0, -1.0), (10.0, -1.0)), seg((-10.0, 1.0), (10.0, 1.0))];
         let seen: Vec<_> =
             corridor.iter().map(|l| l.transformed(&Pose2::new(2.0, 0.0, 0.0).inverse())).collect();
         let predicted = Pose2::new(0.0, 0.0, 0.1);
-        assert!(recover(&predicted, &seen, &corridor, &Recovery::standard()).is_none());
+        assert!(recover(&predicted, &TIGHT, &seen, &corridor, &Recovery::standard()).is_none());
     }
 
     #[test]
     fn degenerate_input_gives_none() {
         let nan = seg((f64::NAN, 0.0), (1.0, 0.0));
-        assert!(recover(&Pose2::identity(), &[nan, nan], &room(), &Recovery::standard()).is_none());
-        assert!(recover(&Pose2::identity(), &room(), &[], &Recovery::standard()).is_none());
+        assert!(
+            recover(&Pose2::identity(), &TIGHT, &[nan, nan], &room(), &Recovery::standard())
+                .is_none()
+        );
+        assert!(recover(&Pose2::identity(), &TIGHT, &room(), &[], &Recovery::standard()).is_none());
     }
 
     #[test]
