@@ -71,7 +71,9 @@ pub struct EvalArgs {
     #[arg(long)]
     real: bool,
     /// Also run the drift grid on Intel (for --real): heading-rate biases
-    /// 0.1, 0.3 and 1°/s, speed errors 2-3%, seeds 1-4, every aiding mode.
+    /// 0.1, 0.3 and 1°/s, speed errors 2-3%, seeds 1-4, every aiding mode;
+    /// and MIT CSAIL's sensitivity runs: its raw odometry plus a tiny random
+    /// walk, seeds 1-8, the estimator alone and with loop closure.
     #[arg(long)]
     drift_grid: bool,
     /// Seed of the synthetic drift added to the Intel log's poses (for --real).
@@ -744,6 +746,10 @@ fn print_real(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
         outln!()?;
         print_drift_grid(&r.drift_grid)?;
     }
+    if !r.csail_sensitivity.is_empty() {
+        outln!()?;
+        print_sensitivity(&r.csail_sensitivity)?;
+    }
     outln!()?;
     print_utm(&r.utm)?;
     outln!()?;
@@ -905,6 +911,64 @@ fn print_drift_grid(grid: &[crate::eval_real::DriftCell]) -> anyhow::Result<()> 
             c.relations.translation_std_m,
             c.relations.rotation_mean_deg,
             c.relations.rotation_std_deg
+        )?;
+    }
+    Ok(())
+}
+
+/// MIT CSAIL's sensitivity runs, run by run, then each mode's median and
+/// range.
+fn print_sensitivity(runs: &[crate::eval_real::SensitivityRun]) -> anyhow::Result<()> {
+    let p = crate::eval_real::CSAIL_PERTURBATION;
+    outln!(
+        "MIT CSAIL sensitivity: the raw odometry plus a random walk of {} mm/sqrt(s) per axis and {:.4}°/sqrt(s), seeds {:?}",
+        p.position_random_walk_m_sqrt_s * 1e3,
+        p.heading_random_walk_rad_sqrt_s.to_degrees(),
+        crate::eval_real::CSAIL_SEEDS
+    )?;
+    outln!(
+        "{:<34} {:>5} {:>11} {:>9} {:>11} {:>9} {:>17}",
+        "trajectory",
+        "seed",
+        "heading rms",
+        "pos rms",
+        "rigid head.",
+        "rigid pos",
+        "rel. rot (deg)"
+    )?;
+    let f = |v: Option<f64>| v.unwrap_or(f64::NAN);
+    for run in runs {
+        let t = &run.row;
+        outln!(
+            "{:<34} {:>5} {:>9.2} ° {:>7.2} m {:>9.2} ° {:>7.2} m {:>8.3} ± {:<6.3}",
+            t.name,
+            run.seed,
+            f(t.heading_rms_deg),
+            f(t.position_rms_m),
+            f(t.rigid_heading_rms_deg),
+            f(t.rigid_position_rms_m),
+            t.relations.rotation_mean_deg,
+            t.relations.rotation_std_deg
+        )?;
+    }
+    let mut names: Vec<&str> = Vec::new();
+    for r in runs {
+        if !names.contains(&r.row.name.as_str()) {
+            names.push(&r.row.name);
+        }
+    }
+    for name in names {
+        let of = |g: fn(&crate::eval_real::TrajectoryRow) -> Option<f64>| {
+            let mut v: Vec<f64> =
+                runs.iter().filter(|r| r.row.name == name).filter_map(|r| g(&r.row)).collect();
+            v.sort_by(f64::total_cmp);
+            let median = v.get(v.len() / 2).copied().unwrap_or(f64::NAN);
+            (median, v.first().copied().unwrap_or(f64::NAN), v.last().copied().unwrap_or(f64::NAN))
+        };
+        let (h, h_lo, h_hi) = of(|t| t.rigid_heading_rms_deg);
+        let (p, p_lo, p_hi) = of(|t| t.rigid_position_rms_m);
+        outln!(
+            "{name}: rigid heading rms median {h:.2}° (range {h_lo:.2}-{h_hi:.2}°), rigid position rms median {p:.2} m (range {p_lo:.2}-{p_hi:.2} m)"
         )?;
     }
     Ok(())

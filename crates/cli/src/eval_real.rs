@@ -40,6 +40,24 @@ pub const INTEL_DRIFT: OdometryModel = OdometryModel {
     position_random_walk_m_sqrt_s: 0.005,
 };
 
+/// The perturbation of the MIT CSAIL sensitivity runs (`--drift-grid`): a
+/// random walk far below any odometry's error (0.1 mm/sqrt(s) per axis and
+/// 0.0006°/sqrt(s): over 7 minutes and 200 m, about 0.01° of heading and,
+/// with its lever arm, 1-2 cm of position, where the raw odometry is off by
+/// 36° and 12 m rms) added to the raw odometry. It shows how far a whole-log figure moves when
+/// nothing that matters changes: each run decides the same gates, matches
+/// and loops differently in a few places, and on this log one wrong loop
+/// moves the trajectory by degrees.
+pub const CSAIL_PERTURBATION: OdometryModel = OdometryModel {
+    heading_rate_bias_rad_s: 0.0,
+    heading_random_walk_rad_sqrt_s: 1e-5,
+    speed_scale_error: 0.0,
+    position_random_walk_m_sqrt_s: 1e-4,
+};
+
+/// The seeds of the MIT CSAIL sensitivity runs.
+pub const CSAIL_SEEDS: [u64; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
+
 /// The aiding modes compared on real data: the aiding, and loop closure on
 /// top of it or not.
 fn modes(config: &NamedConfig) -> [(&'static str, AidingConfig, Option<LoopClosureConfig>); 6] {
@@ -153,6 +171,10 @@ pub struct RealReport {
     /// MIT CSAIL: the loops of each loop-closing mode against the corrected
     /// poses.
     pub csail_loops: Vec<LoopRow>,
+    /// MIT CSAIL with [`CSAIL_PERTURBATION`] added to the raw odometry,
+    /// seeds [`CSAIL_SEEDS`], the estimator alone and with loop closure;
+    /// empty unless asked for (`--drift-grid`).
+    pub csail_sensitivity: Vec<SensitivityRun>,
     /// Intel: the relation metric of the log's own poses, then of the drifted
     /// poses raw and aided.
     pub intel: Vec<TrajectoryRow>,
@@ -297,7 +319,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
     // The logs on the thread pool; each part's figures do not depend on
     // the others or on the number of threads.
     let ((csail, intel), (csail_own, (detection, utm))) = rayon::join(
-        || rayon::join(|| csail(data, config), || intel(data, seed, config, grid)),
+        || rayon::join(|| csail(data, config, grid), || intel(data, seed, config, grid)),
         || {
             rayon::join(
                 || csail_own(data, config),
@@ -317,7 +339,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
             )
         },
     );
-    let (csail_pairs, csail, csail_loops) = csail?;
+    let CsailResult { pairs: csail_pairs, rows: csail, loops: csail_loops, sensitivity } = csail?;
     let IntelResult { rows: intel, moved: mut own_poses, cells: drift_grid, loops: intel_loops } =
         intel?;
     own_poses.extend(csail_own?);
@@ -327,6 +349,7 @@ pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Res
         csail_pairs,
         csail,
         csail_loops,
+        csail_sensitivity: sensitivity,
         intel,
         intel_loops,
         own_poses,
@@ -377,18 +400,26 @@ impl Loops {
 const CSAIL_REFERENCE_GAP_SCANS: usize = 2;
 
 /// MIT CSAIL: raw and aided odometry at the scans with corrected poses, and
-/// the loops of the loop-closing modes against the corrected poses.
-fn csail(data: &Path, config: &NamedConfig) -> Result<CsailResult> {
+/// the loops of the loop-closing modes against the corrected poses; with
+/// `sensitivity`, the estimator's runs on perturbed odometry
+/// ([`CSAIL_PERTURBATION`]).
+fn csail(data: &Path, config: &NamedConfig, sensitivity: bool) -> Result<CsailResult> {
     let dir = data.join("mit-csail");
     let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt"))?;
     let mut loops = Loops::new(config)?;
     let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); modes(config).len()];
     let mut sources = Vec::new();
+    // Each scan's stamp and lines, kept for the sensitivity runs.
+    let mut kept: Vec<(Option<f64>, Vec<SensorLine>)> = Vec::new();
     for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
         let LogRecord::Scan(s) = record? else { continue };
         let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
-        for (out, pose) in poses.iter_mut().zip(loops.step(&s.scan, &source)) {
-            out.push(pose);
+        let lines = loops.detector.detect(&s.scan).lines;
+        for (out, l) in poses.iter_mut().zip(&mut loops.loops) {
+            out.push(l.step_with(s.scan.stamp_s, &source, lines).0);
+        }
+        if sensitivity {
+            kept.push((s.scan.stamp_s, lines.iter().map(SensorLine::from).collect()));
         }
         sources.push(source);
     }
@@ -397,31 +428,98 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<CsailResult> {
     let per_scan = reference_by_source(&corrected, &sources, CSAIL_REFERENCE_GAP_SCANS);
     loops.finish(&mut poses);
     let loop_rows = check_loops(config, &loops.loops, &per_scan);
-    // Relations between consecutive corrected scans, stamped by pair index.
-    let reference: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
-    let relations: Vec<Relation> = (1..reference.len())
-        .map(|k| Relation {
-            t1_s: (k - 1) as f64,
-            t2_s: k as f64,
-            relative: reference[k - 1].between(&reference[k]),
-        })
-        .collect();
-    let mut rows = Vec::new();
-    for ((name, _, _), est) in modes(config).iter().zip(&poses) {
-        let picked: Vec<Pose2> = pairs
+    let score = CsailScore::new(&pairs);
+    let rows = modes(config)
+        .iter()
+        .zip(&poses)
+        .map(|((name, _, _), est)| score.row(&format!("{name} odometry"), est))
+        .collect::<Result<_>>()?;
+    let sensitivity = if sensitivity {
+        // The stamps of a log without them count one second a scan.
+        let times: Vec<f64> =
+            kept.iter().enumerate().map(|(k, (t, _))| t.unwrap_or(k as f64)).collect();
+        let runs: Vec<(u64, &'static str, AidingConfig, Option<LoopClosureConfig>)> = CSAIL_SEEDS
+            .iter()
+            .flat_map(|&seed| {
+                modes(config).into_iter().skip(4).map(move |(name, a, l)| (seed, name, a, l))
+            })
+            .collect();
+        runs.par_iter()
+            .map(|&(seed, name, aiding, loop_closure)| {
+                let perturbed = CSAIL_PERTURBATION.corrupt_stamped(&sources, &times, seed);
+                let mut localizer = Localizer::new(aiding, config.map, loop_closure)?;
+                let mut est: Vec<Pose2> = kept
+                    .iter()
+                    .zip(&perturbed)
+                    .map(|((stamp, lines), source)| localizer.step_with(*stamp, source, lines).0)
+                    .collect();
+                if let Some(final_poses) = localizer.finish() {
+                    for (e, p) in est.iter_mut().zip(final_poses) {
+                        *e = p.unwrap_or(*e);
+                    }
+                }
+                Ok(SensitivityRun { seed, row: score.row(&format!("{name} odometry"), &est)? })
+            })
+            .collect::<Result<Vec<_>>>()?
+    } else {
+        Vec::new()
+    };
+    Ok(CsailResult { pairs: pairs.len(), rows, loops: loop_rows, sensitivity })
+}
+
+/// What [`csail`] measures.
+struct CsailResult {
+    /// Scans with corrected poses.
+    pairs: usize,
+    /// A row per mode.
+    rows: Vec<TrajectoryRow>,
+    /// The loops of the loop-closing modes.
+    loops: Vec<LoopRow>,
+    /// The sensitivity runs, if asked for.
+    sensitivity: Vec<SensitivityRun>,
+}
+
+/// Scores a trajectory of the raw log's scans against MIT CSAIL's corrected
+/// poses: absolute errors aligned at the first pair and rigidly, and the
+/// relation metric between consecutive corrected scans (stamped by pair
+/// index).
+struct CsailScore<'a> {
+    pairs: &'a [pcaline_io::ScanPair],
+    reference: Vec<Pose2>,
+    relations: Vec<Relation>,
+}
+
+impl<'a> CsailScore<'a> {
+    fn new(pairs: &'a [pcaline_io::ScanPair]) -> Self {
+        let reference: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
+        let relations = (1..reference.len())
+            .map(|k| Relation {
+                t1_s: (k - 1) as f64,
+                t2_s: k as f64,
+                relative: reference[k - 1].between(&reference[k]),
+            })
+            .collect();
+        CsailScore { pairs, reference, relations }
+    }
+
+    /// The row of the trajectory `est` (a pose per raw scan), named `name`.
+    fn row(&self, name: &str, est: &[Pose2]) -> Result<TrajectoryRow> {
+        let picked: Vec<Pose2> = self
+            .pairs
             .iter()
             .map(|p| {
                 est.get(p.raw_index).copied().context("a pair names a raw scan beyond the log")
             })
             .collect::<Result<_>>()?;
-        let e = aligned_trajectory_errors(&picked, &reference).context("no pairs")?;
-        let rigid = rigidly_aligned_trajectory_errors(&picked, &reference).context("no pairs")?;
+        let e = aligned_trajectory_errors(&picked, &self.reference).context("no pairs")?;
+        let rigid =
+            rigidly_aligned_trajectory_errors(&picked, &self.reference).context("no pairs")?;
         let stamped = StampedTrajectory::new(
             picked.iter().enumerate().map(|(k, p)| (k as f64, *p)).collect(),
         );
-        let r = relation_errors(&stamped, &relations, 0.0).context("no relations")?;
-        rows.push(TrajectoryRow {
-            name: format!("{name} odometry"),
+        let r = relation_errors(&stamped, &self.relations, 0.0).context("no relations")?;
+        Ok(TrajectoryRow {
+            name: name.to_string(),
             heading_rms_deg: Some(e.heading_rms_rad.to_degrees()),
             heading_max_deg: Some(e.heading_max_rad.to_degrees()),
             position_rms_m: Some(e.position_rms_m),
@@ -429,13 +527,9 @@ fn csail(data: &Path, config: &NamedConfig) -> Result<CsailResult> {
             rigid_heading_rms_deg: Some(rigid.heading_rms_rad.to_degrees()),
             rigid_position_rms_m: Some(rigid.position_rms_m),
             relations: r.into(),
-        });
+        })
     }
-    Ok((pairs.len(), rows, loop_rows))
 }
-
-/// What [`csail`] measures: the pairs, a row per mode, the loops.
-type CsailResult = (usize, Vec<TrajectoryRow>, Vec<LoopRow>);
 
 /// The loops of each loop-closing mode among `localizers` (one per
 /// [`modes`]) checked against `reference` (a pose per scan), named as the
@@ -547,6 +641,15 @@ pub struct DriftCell {
     pub position_rms_m: f64,
     /// The relation metric.
     pub relations: RelationRow,
+}
+
+/// One MIT CSAIL sensitivity run ([`CSAIL_PERTURBATION`]).
+#[derive(Debug, Serialize)]
+pub struct SensitivityRun {
+    /// The perturbation's seed.
+    pub seed: u64,
+    /// The trajectory against the corrected poses (named by its mode).
+    pub row: TrajectoryRow,
 }
 
 /// The Intel log's records, time-ordered, with each scan's lines.
@@ -870,4 +973,25 @@ pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport>
         occupied_cells_not_moving: cells[1].count(),
         occupied_cells_lidar_only_without_deskew: cells[2].count(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sensitivity runs' perturbation is far below any odometry's error:
+    /// over 7 minutes and 210 m at 5 scans a second it moves the path by
+    /// 1-2 cm and hundredths of a degree, whatever the seed.
+    #[test]
+    fn the_csail_perturbation_is_tiny() {
+        let times: Vec<f64> = (0..2100).map(|k| k as f64 * 0.2).collect();
+        let path: Vec<Pose2> =
+            times.iter().map(|t| Pose2::new(0.5 * t, (0.1 * t).sin(), 0.05 * t)).collect();
+        for seed in CSAIL_SEEDS {
+            let moved = CSAIL_PERTURBATION.corrupt_stamped(&path, &times, seed);
+            let e = trajectory_errors(&moved, &path).unwrap();
+            assert!(e.position_rms_m < 0.03 && e.heading_max_rad.to_degrees() < 0.05, "{e:?}");
+            assert!(e.position_rms_m > 0.0, "the seeds perturb");
+        }
+    }
 }
