@@ -441,7 +441,10 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity: bool) -> Result<CsailRe
         let runs: Vec<(u64, &'static str, AidingConfig, Option<LoopClosureConfig>)> = CSAIL_SEEDS
             .iter()
             .flat_map(|&seed| {
-                modes(config).into_iter().skip(4).map(move |(name, a, l)| (seed, name, a, l))
+                modes(config)
+                    .into_iter()
+                    .filter(|(_, a, _)| a.mode == AidingMode::Estimator)
+                    .map(move |(name, a, l)| (seed, name, a, l))
             })
             .collect();
         runs.par_iter()
