@@ -1,20 +1,26 @@
 //! Loop closure end to end on the MIT CSAIL log: its raw odometry drifts by
 //! tens of degrees and metres, and the robot returns to corridors it mapped
 //! long before. With loop closure the heading must come out ahead of the
-//! estimator alone, and no accepted loop may contradict the corrected
-//! poses; fed the log's own corrected poses, it must leave them
-//! essentially unchanged (closer than the estimator alone). The twin-room false loop is a unit test of
-//! `pcaline_aiding::LoopClosing`; the full tables are `pcaline eval --real`.
+//! estimator alone, on the log as it is and on average over the sensitivity
+//! runs (the odometry plus a tiny seeded random walk), and no accepted loop
+//! may contradict the corrected poses on the log as it is (over the
+//! sensitivity runs false loops stand: a known defect, an ignored test);
+//! fed the log's own corrected poses, it must leave them essentially
+//! unchanged (closer than the estimator alone). The twin-room false loop is
+//! a unit test of `pcaline_aiding::LoopClosing`; the full tables are
+//! `pcaline eval --real`.
 
 mod support;
 use support::data;
 
-use pcaline::aiding::{AidingConfig, LoopClosing, LoopClosureConfig, LoopOutcome, SensorLine};
+use pcaline::aiding::{
+    Aiding, AidingConfig, LoopClosing, LoopClosureConfig, LoopOutcome, SensorLine,
+};
 use pcaline::mapping::MapConfig;
 use pcaline::{Config, LineDetector, Pose2};
 use pcaline_eval::{
-    LoopCheck, aligned_trajectory_errors, reference_by_source, rigidly_aligned_trajectory_errors,
-    trajectory_errors,
+    LoopCheck, SENSITIVITY_SEEDS, aligned_trajectory_errors, perturbed, reference_by_source,
+    rigidly_aligned_trajectory_errors, trajectory_errors,
 };
 use pcaline_io::{CarmenOptions, CarmenReader, LogRecord, read_scan_pairs};
 use std::path::Path;
@@ -23,21 +29,54 @@ use std::path::Path;
 /// picking the source pose of each scan; returns the optimized trajectory
 /// and the loop closing itself (its loops and keyframes).
 fn run(log: &Path, source: impl Fn(&pcaline_io::ScanRecord) -> Pose2) -> (Vec<Pose2>, LoopClosing) {
+    let scans = read(log);
+    let sources: Vec<Pose2> = scans.iter().map(|s| source(&s.record)).collect();
+    run_lines(&scans, &sources)
+}
+
+/// A log's scans: each record with its detected lines.
+struct Scan {
+    record: pcaline_io::ScanRecord,
+    lines: Vec<SensorLine>,
+}
+
+fn read(log: &Path) -> Vec<Scan> {
     let mut detector = LineDetector::new(Config::default()).unwrap();
+    CarmenReader::open(log, CarmenOptions::default())
+        .unwrap()
+        .filter_map(|r| match r.unwrap() {
+            LogRecord::Scan(s) => {
+                let lines = detector.detect(&s.scan).lines.iter().map(SensorLine::from).collect();
+                Some(Scan { record: s, lines })
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// The estimator with loop closure over `scans` with `sources`.
+fn run_lines(scans: &[Scan], sources: &[Pose2]) -> (Vec<Pose2>, LoopClosing) {
     let mut slam = LoopClosing::new(
         AidingConfig::estimator(),
         MapConfig::default(),
         LoopClosureConfig::standard(),
     )
     .unwrap();
-    for record in CarmenReader::open(log, CarmenOptions::default()).unwrap() {
-        let LogRecord::Scan(s) = record.unwrap() else { continue };
-        let lines: Vec<SensorLine> =
-            detector.detect(&s.scan).lines.iter().map(SensorLine::from).collect();
-        slam.step_at(s.scan.stamp_s.unwrap(), &source(&s), &lines);
+    for (s, source) in scans.iter().zip(sources) {
+        slam.step_at(s.record.scan.stamp_s.unwrap(), source, &s.lines);
     }
     slam.optimize();
     (slam.trajectory().into_iter().map(Option::unwrap).collect(), slam)
+}
+
+/// The estimator alone over `scans` with `sources`.
+fn run_alone(scans: &[Scan], sources: &[Pose2]) -> Vec<Pose2> {
+    let mut aiding = Aiding::new(AidingConfig::estimator(), MapConfig::default()).unwrap();
+    scans
+        .iter()
+        .zip(sources)
+        .map(|(s, source)| aiding.step_at(s.record.scan.stamp_s.unwrap(), source, &s.lines).0)
+        .collect()
 }
 
 #[test]
@@ -68,6 +107,8 @@ fn csail_raw_odometry_heading_is_ahead_of_the_estimator_alone() {
     let reference: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
     let e = rigidly_aligned_trajectory_errors(&picked, &reference).unwrap();
     let first = aligned_trajectory_errors(&picked, &reference).unwrap();
+    // One draw (the sensitivity tests below): its bounds hold for the log
+    // as it is, not for every perturbation of it.
     // Rigidly aligned: the estimator alone 18.6° / 4.1 m, raw odometry
     // 22.1° / 8.7 m; aligned at the first pair: the estimator alone 24.1°.
     // Measured with loops: 12.0° / 2.0 m rigid, 11.9° at the first pair,
@@ -78,6 +119,86 @@ fn csail_raw_odometry_heading_is_ahead_of_the_estimator_alone() {
     assert!(e.heading_rms_rad.to_degrees() < 14.0, "{e:?}");
     assert!(first.heading_rms_rad.to_degrees() < 14.0, "{first:?}");
     assert!(e.position_rms_m < 3.0, "{e:?}");
+}
+
+/// One sensitivity run on MIT CSAIL's raw odometry: loop closure's and the
+/// estimator alone's rigid heading rms, degrees, and loop closure's loops
+/// against the corrected poses.
+struct SeedRun {
+    seed: u64,
+    with_loops_deg: f64,
+    alone_deg: f64,
+    loops: LoopCheck,
+}
+
+/// The sensitivity runs (`pcaline_eval::perturbed`, seeds 1-8) on MIT
+/// CSAIL's raw odometry, as `pcaline eval --real --drift-grid` runs them.
+fn csail_sensitivity_runs(dir: &Path) -> Vec<SeedRun> {
+    let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt")).unwrap();
+    let scans = read(&dir.join("mit-csail.clf"));
+    let odometry: Vec<Pose2> = scans.iter().map(|s| s.record.odometry.unwrap()).collect();
+    let times: Vec<f64> = scans.iter().map(|s| s.record.scan.stamp_s.unwrap()).collect();
+    let corrected: Vec<(usize, Pose2)> =
+        pairs.iter().map(|p| (p.raw_index, p.corrected_pose)).collect();
+    let reference = reference_by_source(&corrected, &odometry, 5);
+    let truth: Vec<Pose2> = pairs.iter().map(|p| p.corrected_pose).collect();
+    let rigid_heading_deg = |poses: &[Pose2]| {
+        let picked: Vec<Pose2> = pairs.iter().map(|p| poses[p.raw_index]).collect();
+        rigidly_aligned_trajectory_errors(&picked, &truth).unwrap().heading_rms_rad.to_degrees()
+    };
+    SENSITIVITY_SEEDS
+        .iter()
+        .map(|&seed| {
+            let sources = perturbed(&odometry, &times, seed);
+            let (poses, slam) = run_lines(&scans, &sources);
+            let keyframes: Vec<usize> = slam.keyframes().iter().map(|k| k.scan).collect();
+            SeedRun {
+                seed,
+                with_loops_deg: rigid_heading_deg(&poses),
+                alone_deg: rigid_heading_deg(&run_alone(&scans, &sources)),
+                loops: LoopCheck::of(slam.loops(), &keyframes, &reference),
+            }
+        })
+        .collect()
+}
+
+/// On MIT CSAIL's raw odometry a whole-log figure is one draw: a random
+/// walk of 1-2 cm and 0.01° added to the odometry moves loop closure's
+/// rigid heading rms anywhere in 10-19° (`docs/accuracy.md`, "How far one
+/// run can be trusted"). Over the sensitivity runs, loop closure's mean
+/// heading error must stay below the estimator alone's, and every run must
+/// check loops.
+#[test]
+fn csail_loop_closure_is_ahead_over_the_sensitivity_runs() {
+    let Some(dir) = data("mit-csail") else { return };
+    let runs = csail_sensitivity_runs(&dir);
+    let mean = |f: fn(&SeedRun) -> f64| runs.iter().map(f).sum::<f64>() / runs.len() as f64;
+    let (with_loops, alone) = (mean(|r| r.with_loops_deg), mean(|r| r.alone_deg));
+    // Measured (seeds 1-8): with loops 14.9° mean (10.3-18.8°), the
+    // estimator alone 16.1° (14.8-18.4°); raw odometry 22.1°; 9-21 loops
+    // checked a run.
+    assert!(with_loops < alone, "with loops {with_loops:.2}°, alone {alone:.2}°");
+    for r in &runs {
+        assert!(r.loops.standing >= 5, "seed {}: {:?}", r.seed, r.loops);
+    }
+}
+
+/// Known defect (issue "Globally consistent line maps"): in 6 of the 8
+/// sensitivity runs a loop stands that the corrected poses contradict by
+/// 2-12.5 m: two neighbouring keyframes aligned to a look-alike place where
+/// the drifted estimate lies, each confirming the other. The unperturbed
+/// run (`csail_raw_odometry_heading_is_ahead_of_the_estimator_alone`) is
+/// one of the lucky draws. Run with `cargo test --release --test
+/// loop_closure -- --ignored`.
+#[test]
+#[ignore = "known defect: false loops stand in 6 of 8 sensitivity runs"]
+fn csail_no_false_loop_stands_in_any_sensitivity_run() {
+    let Some(dir) = data("mit-csail") else { return };
+    for r in csail_sensitivity_runs(&dir) {
+        for (m, deg) in &r.loops.standing_errors {
+            assert!(*m < 0.5, "seed {}: a false loop stands: off by {m} m, {deg}°", r.seed);
+        }
+    }
 }
 
 #[test]

@@ -919,12 +919,12 @@ fn print_drift_grid(grid: &[crate::eval_real::DriftCell]) -> anyhow::Result<()> 
 /// MIT CSAIL's sensitivity runs, run by run, then each mode's median and
 /// range.
 fn print_sensitivity(runs: &[crate::eval_real::SensitivityRun]) -> anyhow::Result<()> {
-    let p = crate::eval_real::CSAIL_PERTURBATION;
+    let p = pcaline_eval::SENSITIVITY_PERTURBATION;
     outln!(
         "MIT CSAIL sensitivity: the raw odometry plus a random walk of {} mm/sqrt(s) per axis and {:.4}°/sqrt(s), seeds {:?}",
         p.position_random_walk_m_sqrt_s * 1e3,
         p.heading_random_walk_rad_sqrt_s.to_degrees(),
-        crate::eval_real::CSAIL_SEEDS
+        pcaline_eval::SENSITIVITY_SEEDS
     )?;
     outln!(
         "{:<34} {:>5} {:>11} {:>9} {:>11} {:>9} {:>17}",

@@ -11,8 +11,9 @@ use pcaline::aiding::{Aiding, AidingConfig, AidingMode, Localizer, LoopClosureCo
 use pcaline::geometry::SensorProfile;
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
-    LoopCheck, RelationErrors, StampedTrajectory, aligned_trajectory_errors, reference_by_source,
-    relation_errors, rigidly_aligned_trajectory_errors, trajectory_errors,
+    LoopCheck, RelationErrors, SENSITIVITY_SEEDS, StampedTrajectory, aligned_trajectory_errors,
+    perturbed, reference_by_source, relation_errors, rigidly_aligned_trajectory_errors,
+    trajectory_errors,
 };
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
@@ -39,24 +40,6 @@ pub const INTEL_DRIFT: OdometryModel = OdometryModel {
     speed_scale_error: 0.03,
     position_random_walk_m_sqrt_s: 0.005,
 };
-
-/// The perturbation of the MIT CSAIL sensitivity runs (`--drift-grid`): a
-/// random walk far below any odometry's error (0.1 mm/sqrt(s) per axis and
-/// 0.0006°/sqrt(s): over 7 minutes and 200 m, about 0.01° of heading and,
-/// with its lever arm, 1-2 cm of position, where the raw odometry is off by
-/// 36° and 12 m rms) added to the raw odometry. It shows how far a whole-log figure moves when
-/// nothing that matters changes: each run decides the same gates, matches
-/// and loops differently in a few places, and on this log one wrong loop
-/// moves the trajectory by degrees.
-pub const CSAIL_PERTURBATION: OdometryModel = OdometryModel {
-    heading_rate_bias_rad_s: 0.0,
-    heading_random_walk_rad_sqrt_s: 1e-5,
-    speed_scale_error: 0.0,
-    position_random_walk_m_sqrt_s: 1e-4,
-};
-
-/// The seeds of the MIT CSAIL sensitivity runs.
-pub const CSAIL_SEEDS: [u64; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
 
 /// The aiding modes compared on real data: the aiding, and loop closure on
 /// top of it or not.
@@ -171,8 +154,8 @@ pub struct RealReport {
     /// MIT CSAIL: the loops of each loop-closing mode against the corrected
     /// poses.
     pub csail_loops: Vec<LoopRow>,
-    /// MIT CSAIL with [`CSAIL_PERTURBATION`] added to the raw odometry,
-    /// seeds [`CSAIL_SEEDS`], the estimator alone and with loop closure;
+    /// MIT CSAIL with [`pcaline_eval::perturbed`] raw odometry, seeds
+    /// [`SENSITIVITY_SEEDS`], the estimator alone and with loop closure;
     /// empty unless asked for (`--drift-grid`).
     pub csail_sensitivity: Vec<SensitivityRun>,
     /// Intel: the relation metric of the log's own poses, then of the drifted
@@ -402,7 +385,7 @@ const CSAIL_REFERENCE_GAP_SCANS: usize = 2;
 /// MIT CSAIL: raw and aided odometry at the scans with corrected poses, and
 /// the loops of the loop-closing modes against the corrected poses; with
 /// `sensitivity`, the estimator's runs on perturbed odometry
-/// ([`CSAIL_PERTURBATION`]).
+/// ([`pcaline_eval::perturbed`]).
 fn csail(data: &Path, config: &NamedConfig, sensitivity: bool) -> Result<CsailResult> {
     let dir = data.join("mit-csail");
     let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt"))?;
@@ -438,22 +421,23 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity: bool) -> Result<CsailRe
         // The stamps of a log without them count one second a scan.
         let times: Vec<f64> =
             kept.iter().enumerate().map(|(k, (t, _))| t.unwrap_or(k as f64)).collect();
-        let runs: Vec<(u64, &'static str, AidingConfig, Option<LoopClosureConfig>)> = CSAIL_SEEDS
-            .iter()
-            .flat_map(|&seed| {
-                modes(config)
-                    .into_iter()
-                    .filter(|(_, a, _)| a.mode == AidingMode::Estimator)
-                    .map(move |(name, a, l)| (seed, name, a, l))
-            })
-            .collect();
+        let runs: Vec<(u64, &'static str, AidingConfig, Option<LoopClosureConfig>)> =
+            SENSITIVITY_SEEDS
+                .iter()
+                .flat_map(|&seed| {
+                    modes(config)
+                        .into_iter()
+                        .filter(|(_, a, _)| a.mode == AidingMode::Estimator)
+                        .map(move |(name, a, l)| (seed, name, a, l))
+                })
+                .collect();
         runs.par_iter()
             .map(|&(seed, name, aiding, loop_closure)| {
-                let perturbed = CSAIL_PERTURBATION.corrupt_stamped(&sources, &times, seed);
+                let source_poses = perturbed(&sources, &times, seed);
                 let mut localizer = Localizer::new(aiding, config.map, loop_closure)?;
                 let mut est: Vec<Pose2> = kept
                     .iter()
-                    .zip(&perturbed)
+                    .zip(&source_poses)
                     .map(|((stamp, lines), source)| localizer.step_with(*stamp, source, lines).0)
                     .collect();
                 if let Some(final_poses) = localizer.finish() {
@@ -646,7 +630,7 @@ pub struct DriftCell {
     pub relations: RelationRow,
 }
 
-/// One MIT CSAIL sensitivity run ([`CSAIL_PERTURBATION`]).
+/// One MIT CSAIL sensitivity run ([`pcaline_eval::perturbed`]).
 #[derive(Debug, Serialize)]
 pub struct SensitivityRun {
     /// The perturbation's seed.
@@ -976,25 +960,4 @@ pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport>
         occupied_cells_not_moving: cells[1].count(),
         occupied_cells_lidar_only_without_deskew: cells[2].count(),
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The sensitivity runs' perturbation is far below any odometry's error:
-    /// over 7 minutes and 210 m at 5 scans a second it moves the path by
-    /// 1-2 cm and hundredths of a degree, whatever the seed.
-    #[test]
-    fn the_csail_perturbation_is_tiny() {
-        let times: Vec<f64> = (0..2100).map(|k| k as f64 * 0.2).collect();
-        let path: Vec<Pose2> =
-            times.iter().map(|t| Pose2::new(0.5 * t, (0.1 * t).sin(), 0.05 * t)).collect();
-        for seed in CSAIL_SEEDS {
-            let moved = CSAIL_PERTURBATION.corrupt_stamped(&path, &times, seed);
-            let e = trajectory_errors(&moved, &path).unwrap();
-            assert!(e.position_rms_m < 0.03 && e.heading_max_rad.to_degrees() < 0.05, "{e:?}");
-            assert!(e.position_rms_m > 0.0, "the seeds perturb");
-        }
-    }
 }

@@ -20,6 +20,7 @@ mod loop_check;
 mod map_quality;
 mod relation_metric;
 mod reproduce;
+mod sensitivity;
 mod sharpness;
 mod trajectory;
 
@@ -41,6 +42,7 @@ pub use reproduce::{
     ETH_EXPERIMENTS, EthExperiment, EthResult, FitRow, FitRowResult, TABLE1, TABLE2, TABLE3,
     dataset, run_eth, run_fit_row,
 };
+pub use sensitivity::{SENSITIVITY_PERTURBATION, SENSITIVITY_SEEDS, perturbed};
 pub use sharpness::OccupiedCells;
 pub use trajectory::{
     TrajectoryErrors, aligned_trajectory_errors, rigidly_aligned_trajectory_errors,
