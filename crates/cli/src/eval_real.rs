@@ -366,11 +366,17 @@ impl Loops {
     /// trajectories (every scan was stepped).
     fn finish(&mut self, poses: &mut [Vec<Pose2>]) {
         for (runner, out) in self.loops.iter_mut().zip(poses) {
-            if let Some(final_poses) = runner.finish() {
-                for (o, p) in out.iter_mut().zip(final_poses) {
-                    *o = p.unwrap_or(*o);
-                }
-            }
+            take_optimized(runner, out);
+        }
+    }
+}
+
+/// Finishes `runner` and, with loop closure, replaces each pose of `poses`
+/// (one per stepped scan) by the optimized one where the graph places it.
+fn take_optimized(runner: &mut Localizer, poses: &mut [Pose2]) {
+    if let Some(final_poses) = runner.finish() {
+        for (o, p) in poses.iter_mut().zip(final_poses) {
+            *o = p.unwrap_or(*o);
         }
     }
 }
@@ -440,11 +446,7 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity: bool) -> Result<CsailRe
                     .zip(&source_poses)
                     .map(|((stamp, lines), source)| localizer.step_with(*stamp, source, lines).0)
                     .collect();
-                if let Some(final_poses) = localizer.finish() {
-                    for (e, p) in est.iter_mut().zip(final_poses) {
-                        *e = p.unwrap_or(*e);
-                    }
-                }
+                take_optimized(&mut localizer, &mut est);
                 Ok(SensitivityRun { seed, row: score.row(&format!("{name} odometry"), &est)? })
             })
             .collect::<Result<Vec<_>>>()?
