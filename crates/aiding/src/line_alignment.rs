@@ -209,8 +209,10 @@ fn intersection(a: &Seg, b: &Seg) -> Option<Point2<f64>> {
 
 /// A match of a (transformed) current line with a candidate line: the
 /// overlap length, if they match.
-fn overlap(c: &Seg, k: &Seg, config: &AlignmentConfig) -> Option<f64> {
-    if undirected_difference(c.angle(), k.angle()) > config.match_angle_rad {
+fn overlap(c: &Seg, k: &Seg, max_sin: f64, config: &AlignmentConfig) -> Option<f64> {
+    // The undirected angle between the lines, compared by its sine (no
+    // atan2 in the inner loop): `max_sin` is `sin(match_angle_rad)`.
+    if c.dir.perp(&k.dir).abs() > max_sin {
         return None;
     }
     let ds = (k.n.dot(&c.start.coords) - k.d).abs();
@@ -226,6 +228,13 @@ fn overlap(c: &Seg, k: &Seg, config: &AlignmentConfig) -> Option<f64> {
     (o >= config.min_overlap_m).then_some(o)
 }
 
+/// The sine of an undirected angle bound: two lines are within `angle_rad`
+/// of each other when the sine of their angle is at most this (any pair
+/// when the bound is 90° or more).
+fn max_sine(angle_rad: f64) -> f64 {
+    if angle_rad >= std::f64::consts::FRAC_PI_2 { f64::INFINITY } else { angle_rad.sin() }
+}
+
 /// For each current line, its best match in the candidate set under `t`:
 /// `(current index, candidate index, overlap)`.
 fn matches(
@@ -236,13 +245,14 @@ fn matches(
     out: &mut Vec<(usize, usize, f64)>,
 ) -> f64 {
     out.clear();
+    let max_sin = max_sine(config.match_angle_rad);
     let mut total = 0.0;
     for (i, c) in current.iter().enumerate() {
         let moved = c.moved(t);
         let best = candidate
             .iter()
             .enumerate()
-            .filter_map(|(j, k)| overlap(&moved, k, config).map(|o| (j, o)))
+            .filter_map(|(j, k)| overlap(&moved, k, max_sin, config).map(|o| (j, o)))
             .max_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((j, o)) = best {
             let o = o.min(c.len);
