@@ -56,12 +56,17 @@ fn read(log: &Path) -> Vec<Scan> {
 
 /// The estimator with loop closure over `scans` with `sources`.
 fn run_lines(scans: &[Scan], sources: &[Pose2]) -> (Vec<Pose2>, LoopClosing) {
-    let mut slam = LoopClosing::new(
-        AidingConfig::estimator(),
-        MapConfig::default(),
-        LoopClosureConfig::standard(),
-    )
-    .unwrap();
+    run_lines_with(scans, sources, LoopClosureConfig::standard())
+}
+
+/// [`run_lines`] with a loop-closure configuration.
+fn run_lines_with(
+    scans: &[Scan],
+    sources: &[Pose2],
+    config: LoopClosureConfig,
+) -> (Vec<Pose2>, LoopClosing) {
+    let mut slam =
+        LoopClosing::new(AidingConfig::estimator(), MapConfig::default(), config).unwrap();
     for (s, source) in scans.iter().zip(sources) {
         slam.step_at(s.record.scan.stamp_s.unwrap(), source, &s.lines);
     }
@@ -133,7 +138,7 @@ struct SeedRun {
 
 /// The sensitivity runs (`pcaline_eval::perturbed`, seeds 1-8) on MIT
 /// CSAIL's raw odometry, as `pcaline eval --real --drift-grid` runs them.
-fn csail_sensitivity_runs(dir: &Path) -> Vec<SeedRun> {
+fn csail_sensitivity_runs(dir: &Path, config: LoopClosureConfig) -> Vec<SeedRun> {
     let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt")).unwrap();
     let scans = read(&dir.join("mit-csail.clf"));
     let odometry: Vec<Pose2> = scans.iter().map(|s| s.record.odometry.unwrap()).collect();
@@ -150,7 +155,7 @@ fn csail_sensitivity_runs(dir: &Path) -> Vec<SeedRun> {
         .iter()
         .map(|&seed| {
             let sources = perturbed(&odometry, &times, seed);
-            let (poses, slam) = run_lines(&scans, &sources);
+            let (poses, slam) = run_lines_with(&scans, &sources, config);
             let keyframes: Vec<usize> = slam.keyframes().iter().map(|k| k.scan).collect();
             SeedRun {
                 seed,
@@ -171,7 +176,7 @@ fn csail_sensitivity_runs(dir: &Path) -> Vec<SeedRun> {
 #[test]
 fn csail_loop_closure_is_ahead_over_the_sensitivity_runs() {
     let Some(dir) = data("mit-csail") else { return };
-    let runs = csail_sensitivity_runs(&dir);
+    let runs = csail_sensitivity_runs(&dir, LoopClosureConfig::standard());
     let mean = |f: fn(&SeedRun) -> f64| runs.iter().map(f).sum::<f64>() / runs.len() as f64;
     let (with_loops, alone) = (mean(|r| r.with_loops_deg), mean(|r| r.alone_deg));
     // Measured (seeds 1-8): with loops 14.9° mean (10.3-18.8°), the
@@ -194,7 +199,25 @@ fn csail_loop_closure_is_ahead_over_the_sensitivity_runs() {
 #[ignore = "known defect: false loops stand in 6 of 8 sensitivity runs"]
 fn csail_no_false_loop_stands_in_any_sensitivity_run() {
     let Some(dir) = data("mit-csail") else { return };
-    for r in csail_sensitivity_runs(&dir) {
+    for r in csail_sensitivity_runs(&dir, LoopClosureConfig::standard()) {
+        for (m, deg) in &r.loops.standing_errors {
+            assert!(*m < 0.5, "seed {}: a false loop stands: off by {m} m, {deg}°", r.seed);
+        }
+    }
+}
+
+/// The opt-in look-alike place search
+/// (`LoopClosureConfig::place_search_scale`) refuses the look-alike loops
+/// of the defect above: at 4, no false loop stands in any sensitivity run.
+/// It is not the default because it refuses right loops too: the heading
+/// is then no better than the estimator's alone (`docs/accuracy.md`).
+#[test]
+fn csail_the_place_search_lets_no_look_alike_loop_stand() {
+    let Some(dir) = data("mit-csail") else { return };
+    let mut config = LoopClosureConfig::standard();
+    config.place_search_scale = 4.0;
+    for r in csail_sensitivity_runs(&dir, config) {
+        // Measured: 3-10 loops stand a run, the worst 0.35 m off (seed 8).
         for (m, deg) in &r.loops.standing_errors {
             assert!(*m < 0.5, "seed {}: a false loop stands: off by {m} m, {deg}°", r.seed);
         }

@@ -19,7 +19,13 @@
 //!    keyframe's frame, are aligned to the lines around the candidate
 //!    ([`align_lines`]: RANSAC over line pairs, then least squares), and the
 //!    alignment must pass a consistency test: enough wall matched, in two
-//!    directions, with a small residual.
+//!    directions, with a small residual. Optionally the winner must also be
+//!    the only place that fits: the current lines are aligned with the
+//!    older keyframes, one stretch per place, within
+//!    [`LoopClosureConfig::place_search_scale`] times the search radius,
+//!    and another place
+//!    matching almost as much wall refuses the loop (a look-alike place
+//!    that the drifted estimate happens to lie near).
 //! 3. **Optimization** ([`PoseGraph::optimize`]): loop edges carry a Cauchy
 //!    kernel and are switched off when the optimum disagrees with them, so a
 //!    false loop does not survive. The map is then rebuilt from the keyframes
@@ -39,6 +45,17 @@ use crate::{
 /// A sample closer than this to a crossing wall is not seeing through it
 /// (the wall it lies on, seen again with noise), metres.
 const SEE_THROUGH_MARGIN_M: f64 = 0.15;
+
+/// Two placements of the current keyframe are the same place within this
+/// distance, metres ...
+const SAME_PLACE_M: f64 = 1.0;
+/// ... and this rotation, radians (5°).
+const SAME_PLACE_RAD: f64 = 0.0873;
+/// The look-alike search aligns one stretch of keyframes per place: a
+/// keyframe closer than this to one already searched, metres ...
+const PLACE_SPACING_M: f64 = 1.5;
+/// ... and turned by less than this, radians (45°), is skipped.
+const PLACE_SPACING_RAD: f64 = 0.785;
 
 /// The sequential edges' noise scale never goes below this: the estimator's
 /// own corrections against its map are not in its motion model.
@@ -113,8 +130,29 @@ pub struct LoopClosureConfig {
     pub max_runner_up: f64,
     /// ... and neither keyframe's local lines may see through the other's
     /// walls over more than this fraction of their length
-    /// ([`see_through_fraction`](crate::see_through_fraction)).
+    /// ([`see_through_fraction`](crate::see_through_fraction)) ...
     pub max_see_through: f64,
+    /// ... and, when this is above 0, no other place may match more than
+    /// `max_runner_up` of the loop's matched length
+    /// ([`LoopRecord::other_place_length_m`]): the older keyframes whose
+    /// graph pose lies within this many times the loop's search radius of
+    /// the current one's, one per place, each aligned with the current
+    /// lines anywhere in that distance and at any rotation.
+    /// It catches what the prior-bounded runner-up cannot: a place
+    /// repeated further along the building, where drift has put the
+    /// estimate near the copy and the true place outside the search.
+    ///
+    /// Off (0) by default. At 4, no look-alike loop stands on MIT CSAIL's
+    /// raw odometry (the log as it is and its eight sensitivity runs), and
+    /// Intel's own poses move 0.49° / 0.106 m instead of 0.83° / 0.179 m.
+    /// But CSAIL's corridors repeat, so right loops are refused too (3
+    /// stand instead of 15, and the heading is no better than the
+    /// estimator's alone); with a heading bias on Intel the first
+    /// right loops into the start room are refused (its twin is down the
+    /// corridor), and the drift then lets a 7 m false loop in (2 of the
+    /// 12 drift cells); and `pcaline map` takes up to 8x as long
+    /// (`docs/accuracy.md`).
+    pub place_search_scale: f64,
     /// The sequential edges' covariance: the estimator's motion model over
     /// the motion between the keyframes, at the noise scale the estimator
     /// adapted to the source ([`StepReport::motion_noise_scale`]), times this.
@@ -158,6 +196,7 @@ impl LoopClosureConfig {
             max_rms_m: 0.04,
             max_runner_up: 0.7,
             max_see_through: 0.5,
+            place_search_scale: 0.0,
             sequential_variance_scale: 1.0,
             loop_floor_m: 0.05,
             loop_floor_rad: 0.5f64.to_radians(),
@@ -194,6 +233,13 @@ impl LoopClosureConfig {
             P,
             "search_sigmas",
             self.search_sigmas,
+            "must be finite and >= 0",
+        )?;
+        ConfigError::check_field(
+            self.place_search_scale >= 0.0 && self.place_search_scale.is_finite(),
+            P,
+            "place_search_scale",
+            self.place_search_scale,
             "must be finite and >= 0",
         )?;
         ConfigError::check_field(
@@ -282,6 +328,10 @@ pub enum LoopOutcome {
     /// Another alignment, at least 0.5 m or 5° away, matches almost as
     /// much wall: the structure repeats.
     Ambiguous,
+    /// Verified, but another place within
+    /// [`LoopClosureConfig::place_search_scale`] times the search radius fits the current lines
+    /// almost as well: the place repeats.
+    LookAlikePlace,
     /// Verified, but no second loop from the next keyframes closed the
     /// same cycle ([`LoopClosureConfig::confirm_keyframes`]).
     Unconfirmed,
@@ -309,6 +359,11 @@ pub struct LoopRecord {
     pub rms_m: f64,
     /// The larger see-through fraction of the two directions.
     pub see_through: f64,
+    /// Matched length of the best alignment with another place within
+    /// [`LoopClosureConfig::place_search_scale`] times the search radius, metres
+    /// (0 when no other place fits, or the loop was refused before the
+    /// search).
+    pub other_place_length_m: f64,
     /// The alignment's information, unit endpoint noise
     /// ([`Alignment::information`]).
     pub information: Matrix3<f64>,
@@ -571,8 +626,17 @@ impl LoopClosing {
         if chosen.is_empty() {
             return 0;
         }
-        let Some((j, a, see_through)) = self.verify_candidates(current, chosen) else { return 0 };
-        self.confirm_loop(current, j, a, see_through)
+        let Some((j, a, see_through, radius)) = self.verify_candidates(current, chosen) else {
+            return 0;
+        };
+        let other = self.other_place_length(current, j, &a, radius);
+        if other > self.config.max_runner_up * a.matched_length_m {
+            let mut r = record(current, j, &a, see_through, LoopOutcome::LookAlikePlace);
+            r.other_place_length_m = other;
+            self.loops.push(r);
+            return 0;
+        }
+        self.confirm_loop(current, j, a, see_through, other)
     }
 
     /// Step 1 of loop closing: keyframes at least
@@ -624,18 +688,19 @@ impl LoopClosing {
     /// keyframe's (within the search prior) and tested (matched length,
     /// constrained directions, residual, ambiguity, walls seen through);
     /// the refused ones recorded. Returns the accepted alignment with the
-    /// longest matched length and its see-through fraction.
+    /// longest matched length, its see-through fraction and its search
+    /// radius.
     fn verify_candidates(
         &mut self,
         current: usize,
         chosen: Vec<(usize, f64, f64)>,
-    ) -> Option<(usize, Alignment, f64)> {
+    ) -> Option<(usize, Alignment, f64, f64)> {
         let c = self.config;
         let here = self.graph.nodes[current];
         let first = current.saturating_sub(c.submap_keyframes);
         let current_seen = self.local_lines(current, first..=current);
         let current_lines: Vec<LineSegment> = current_seen.iter().map(|(l, _)| *l).collect();
-        let mut best: Option<(usize, Alignment, f64)> = None;
+        let mut best: Option<(usize, Alignment, f64, f64)> = None;
         for (j, radius_m, max_rotation_rad) in chosen {
             let lo = j.saturating_sub(c.submap_keyframes);
             let hi = (j + c.submap_keyframes).min(first.saturating_sub(1)).max(j);
@@ -684,19 +749,94 @@ impl LoopClosing {
                 self.loops.push(record(current, j, &a, see_through, outcome));
                 continue;
             }
-            if best.as_ref().is_none_or(|(_, b, _)| a.matched_length_m > b.matched_length_m) {
-                best = Some((j, a, see_through));
+            if best.as_ref().is_none_or(|(_, b, ..)| a.matched_length_m > b.matched_length_m) {
+                best = Some((j, a, see_through, radius_m));
             }
         }
         best
     }
 
+    /// Step 2b: the longest wall matched when the current keyframe's local
+    /// lines are aligned with the local lines around older keyframes (one
+    /// per place: [`PLACE_SPACING_M`], [`PLACE_SPACING_RAD`]; at least
+    /// `min_loop_path_m` of travel back; graph pose within
+    /// `place_search_scale` times the loop's search radius `radius_m`,
+    /// the alignment anywhere in that distance, at any rotation) that place the current keyframe elsewhere than the
+    /// loop with `j` does (beyond 1 m or 5°). Alignments that fail the
+    /// residual or weakest-direction test do not count.
+    fn other_place_length(&self, current: usize, j: usize, a: &Alignment, radius_m: f64) -> f64 {
+        let c = self.config;
+        let search_m = c.place_search_scale * radius_m;
+        if search_m <= 0.0 {
+            return 0.0;
+        }
+        let nodes = &self.graph.nodes;
+        let here = nodes[current];
+        let placed = nodes[j].compose(&a.candidate_from_current);
+        let first = current.saturating_sub(c.submap_keyframes);
+        let current_lines: Vec<LineSegment> =
+            self.local_lines(current, first..=current).into_iter().map(|(l, _)| l).collect();
+        let path_here = self.keyframes[current].path_m;
+        // One stretch per place: a keyframe close to one searched shortly
+        // before it sees the same walls. Only keyframes of the same stretch
+        // of travel are compared: across passes the graph may have drifted,
+        // and one graph position may hold two places.
+        let mut searched: Vec<(usize, Pose2)> = Vec::new();
+        let mut longest = 0.0f64;
+        for (k, (&node, keyframe)) in nodes.iter().zip(&self.keyframes).enumerate().take(first) {
+            let d = here.between(&node);
+            if d.x().hypot(d.y()) > search_m
+                || path_here - keyframe.path_m < c.min_loop_path_m
+                || searched.iter().rev().take_while(|(i, _)| k - i <= 2 * c.submap_keyframes).any(
+                    |(_, s)| {
+                        (s.x() - node.x()).hypot(s.y() - node.y()) < PLACE_SPACING_M
+                            && wrap_angle(s.heading() - node.heading()).abs() < PLACE_SPACING_RAD
+                    },
+                )
+            {
+                continue;
+            }
+            searched.push((k, node));
+            let lo = k.saturating_sub(c.submap_keyframes);
+            let hi = (k + c.submap_keyframes).min(first.saturating_sub(1)).max(k);
+            let lines: Vec<LineSegment> =
+                self.local_lines(k, lo..=hi).into_iter().map(|(l, _)| l).collect();
+            let prior = AlignmentPrior {
+                candidate_from_current: node.between(&here),
+                radius_m: search_m,
+                // Any rotation: where the chain's heading is wrong enough
+                // for the place to be capped, a copy may lie turned.
+                max_rotation_rad: std::f64::consts::PI,
+            };
+            let Some(b) = align_lines(&current_lines, &lines, Some(&prior), &c.alignment) else {
+                continue;
+            };
+            if b.rms_m > c.max_rms_m || b.weakest_direction_m < c.min_weakest_direction_m {
+                continue;
+            }
+            let d = placed.between(&node.compose(&b.candidate_from_current));
+            if d.x().hypot(d.y()) > SAME_PLACE_M || wrap_angle(d.heading()).abs() > SAME_PLACE_RAD {
+                longest = longest.max(b.matched_length_m);
+            }
+        }
+        longest
+    }
+
     /// Step 3: the verified loop waits for a second, from another of the
     /// last keyframes, that closes the same cycle; once confirmed, both
     /// become edges of the graph. Returns the edges added.
-    fn confirm_loop(&mut self, current: usize, j: usize, a: Alignment, see_through: f64) -> usize {
+    fn confirm_loop(
+        &mut self,
+        current: usize,
+        j: usize,
+        a: Alignment,
+        see_through: f64,
+        other_place_length_m: f64,
+    ) -> usize {
         let c = self.config;
-        self.loops.push(record(current, j, &a, see_through, LoopOutcome::Unconfirmed));
+        let mut r = record(current, j, &a, see_through, LoopOutcome::Unconfirmed);
+        r.other_place_length_m = other_place_length_m;
+        self.loops.push(r);
         let index = self.loops.len() - 1;
         // Confirmation: a loop stands once a second one, from another of
         // the last keyframes, closes the same cycle: the first loop, the
@@ -813,6 +953,7 @@ fn record(
         runner_up_length_m: a.runner_up_length_m,
         rms_m: a.rms_m,
         see_through,
+        other_place_length_m: 0.0,
         information: a.information,
         outcome,
     }
@@ -943,6 +1084,52 @@ mod tests {
         );
     }
 
+    /// Laps in room A, then laps in its twin B, 8 m along: with the place
+    /// search on and reaching A, the loops inside B are refused as a
+    /// look-alike place (A fits them as well); with it off they stand.
+    #[test]
+    fn the_place_search_refuses_loops_that_a_twin_place_fits() {
+        let (a, b) = (room(0.0), room(8.0));
+        let run = |scale: f64| {
+            let mut config = LoopClosureConfig::standard();
+            config.place_search_scale = scale;
+            let mut slam =
+                LoopClosing::new(AidingConfig::estimator(), MapConfig::default(), config).unwrap();
+            let mut truth = laps(0.0, 3);
+            let from = *truth.last().unwrap();
+            for k in 1..=20 {
+                let f = k as f64 / 20.0;
+                truth.push(Pose2::new(from.x() + f * 6.5, from.y() * (1.0 - f), 0.0));
+            }
+            truth.extend(laps(8.0, 3));
+            for (k, pose) in truth.iter().enumerate() {
+                let walls = if pose.x() < 3.0 { &a } else { &b };
+                slam.step_at(k as f64 * 0.1, pose, &seen(walls, pose));
+            }
+            slam
+        };
+        let in_b = |slam: &LoopClosing, r: &LoopRecord| {
+            slam.graph().nodes[r.keyframe].x() > 4.0 && slam.graph().nodes[r.candidate].x() > 4.0
+        };
+        let off = run(0.0);
+        assert!(
+            off.loops().iter().any(|r| in_b(&off, r) && r.outcome == LoopOutcome::Accepted),
+            "{:?}",
+            off.loops()
+        );
+        let on = run(10.0);
+        let refused: Vec<&LoopRecord> = on
+            .loops()
+            .iter()
+            .filter(|r| in_b(&on, r) && r.outcome == LoopOutcome::LookAlikePlace)
+            .collect();
+        assert!(!refused.is_empty(), "{:?}", on.loops());
+        for r in refused {
+            assert!(r.other_place_length_m > 0.7 * r.matched_length_m, "{r:?}");
+        }
+        assert!(!on.loops().iter().any(|r| in_b(&on, r) && r.outcome == LoopOutcome::Accepted));
+    }
+
     /// A scan whose stamp goes backwards is skipped by the estimator: its
     /// pose is the last one moved by the source, and it makes no keyframe
     /// (no loop or optimization may start from a guessed pose).
@@ -980,5 +1167,9 @@ mod tests {
         c.optimizer.rounds = 0;
         let e = c.validate().unwrap_err().to_string();
         assert!(e.contains("loop_closure.optimizer.rounds"), "{e}");
+        let mut c = LoopClosureConfig::standard();
+        c.place_search_scale = f64::NAN;
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("loop_closure.place_search_scale"), "{e}");
     }
 }

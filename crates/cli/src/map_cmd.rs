@@ -308,6 +308,7 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
                     LoopOutcome::LargeResidual => "large_residual",
                     LoopOutcome::SeesThroughWalls => "sees_through_walls",
                     LoopOutcome::Ambiguous => "ambiguous",
+                    LoopOutcome::LookAlikePlace => "look_alike_place",
                     LoopOutcome::Unconfirmed => "unconfirmed",
                     _ => "other",
                 },
@@ -321,6 +322,7 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
                 runner_up_length_m: r.runner_up_length_m,
                 rms_m: r.rms_m,
                 see_through: r.see_through,
+                other_place_length_m: r.other_place_length_m,
             })
             .collect(),
         optimizations: l.optimizations(),
@@ -375,6 +377,9 @@ struct LoopOut {
     runner_up_length_m: f64,
     rms_m: f64,
     see_through: f64,
+    /// Wall matched by the best alignment with another place nearby
+    /// (`loop_closure.place_search_scale`): a look-alike place.
+    other_place_length_m: f64,
 }
 
 fn draw(

@@ -142,6 +142,7 @@ mod tests {
             runner_up_length_m: 0.0,
             rms_m: 0.02,
             see_through: 0.0,
+            other_place_length_m: 0.0,
             information: Matrix3::identity(),
             outcome,
         }
