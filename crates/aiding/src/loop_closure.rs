@@ -23,9 +23,8 @@
 //!    the only place that fits: the current lines are aligned with the
 //!    older keyframes, one stretch per place, within
 //!    [`LoopClosureConfig::place_search_scale`] times the search radius,
-//!    and another place
-//!    matching almost as much wall refuses the loop (a look-alike place
-//!    that the drifted estimate happens to lie near).
+//!    and another place matching almost as much wall refuses the loop (a
+//!    look-alike place that the drifted estimate happens to lie near).
 //! 3. **Optimization** ([`PoseGraph::optimize`]): loop edges carry a Cauchy
 //!    kernel and are switched off when the optimum disagrees with them, so a
 //!    false loop does not survive. The map is then rebuilt from the keyframes
@@ -329,8 +328,8 @@ pub enum LoopOutcome {
     /// much wall: the structure repeats.
     Ambiguous,
     /// Verified, but another place within
-    /// [`LoopClosureConfig::place_search_scale`] times the search radius fits the current lines
-    /// almost as well: the place repeats.
+    /// [`LoopClosureConfig::place_search_scale`] times the search radius
+    /// fits the current lines almost as well: the place repeats.
     LookAlikePlace,
     /// Verified, but no second loop from the next keyframes closed the
     /// same cycle ([`LoopClosureConfig::confirm_keyframes`]).
@@ -360,9 +359,9 @@ pub struct LoopRecord {
     /// The larger see-through fraction of the two directions.
     pub see_through: f64,
     /// Matched length of the best alignment with another place within
-    /// [`LoopClosureConfig::place_search_scale`] times the search radius, metres
-    /// (0 when no other place fits, or the loop was refused before the
-    /// search).
+    /// [`LoopClosureConfig::place_search_scale`] times the search radius,
+    /// metres (0 when no other place fits, or the loop was refused before
+    /// the search).
     pub other_place_length_m: f64,
     /// The alignment's information, unit endpoint noise
     /// ([`Alignment::information`]).
@@ -626,17 +625,15 @@ impl LoopClosing {
         if chosen.is_empty() {
             return 0;
         }
-        let Some((j, a, see_through, radius)) = self.verify_candidates(current, chosen) else {
-            return 0;
-        };
-        let other = self.other_place_length(current, j, &a, radius);
-        if other > self.config.max_runner_up * a.matched_length_m {
-            let mut r = record(current, j, &a, see_through, LoopOutcome::LookAlikePlace);
+        let Some(verified) = self.verify_candidates(current, chosen) else { return 0 };
+        let other = self.other_place_length(current, &verified);
+        if other > self.config.max_runner_up * verified.alignment.matched_length_m {
+            let mut r = verified.record(current, LoopOutcome::LookAlikePlace);
             r.other_place_length_m = other;
             self.loops.push(r);
             return 0;
         }
-        self.confirm_loop(current, j, a, see_through, other)
+        self.confirm_loop(current, &verified, other)
     }
 
     /// Step 1 of loop closing: keyframes at least
@@ -688,23 +685,20 @@ impl LoopClosing {
     /// keyframe's (within the search prior) and tested (matched length,
     /// constrained directions, residual, ambiguity, walls seen through);
     /// the refused ones recorded. Returns the accepted alignment with the
-    /// longest matched length, its see-through fraction and its search
-    /// radius.
+    /// longest matched length.
     fn verify_candidates(
         &mut self,
         current: usize,
         chosen: Vec<(usize, f64, f64)>,
-    ) -> Option<(usize, Alignment, f64, f64)> {
+    ) -> Option<VerifiedLoop> {
         let c = self.config;
         let here = self.graph.nodes[current];
         let first = current.saturating_sub(c.submap_keyframes);
         let current_seen = self.local_lines(current, first..=current);
         let current_lines: Vec<LineSegment> = current_seen.iter().map(|(l, _)| *l).collect();
-        let mut best: Option<(usize, Alignment, f64, f64)> = None;
+        let mut best: Option<VerifiedLoop> = None;
         for (j, radius_m, max_rotation_rad) in chosen {
-            let lo = j.saturating_sub(c.submap_keyframes);
-            let hi = (j + c.submap_keyframes).min(first.saturating_sub(1)).max(j);
-            let candidate_seen = self.local_lines(j, lo..=hi);
+            let candidate_seen = self.local_lines(j, self.candidate_stretch(j, first));
             let candidate_lines: Vec<LineSegment> =
                 candidate_seen.iter().map(|(l, _)| *l).collect();
             let prior = AlignmentPrior {
@@ -749,33 +743,45 @@ impl LoopClosing {
                 self.loops.push(record(current, j, &a, see_through, outcome));
                 continue;
             }
-            if best.as_ref().is_none_or(|(_, b, ..)| a.matched_length_m > b.matched_length_m) {
-                best = Some((j, a, see_through, radius_m));
+            if best.as_ref().is_none_or(|b| a.matched_length_m > b.alignment.matched_length_m) {
+                best = Some(VerifiedLoop {
+                    candidate: j,
+                    alignment: a,
+                    see_through,
+                    radius_m,
+                    current_lines: current_lines.clone(),
+                });
             }
         }
         best
+    }
+
+    /// The keyframes whose lines form the local set around candidate `j`:
+    /// `submap_keyframes` on each side, none from `first` on (the current
+    /// keyframe's own local set).
+    fn candidate_stretch(&self, j: usize, first: usize) -> std::ops::RangeInclusive<usize> {
+        let n = self.config.submap_keyframes;
+        j.saturating_sub(n)..=(j + n).min(first.saturating_sub(1)).max(j)
     }
 
     /// Step 2b: the longest wall matched when the current keyframe's local
     /// lines are aligned with the local lines around older keyframes (one
     /// per place: [`PLACE_SPACING_M`], [`PLACE_SPACING_RAD`]; at least
     /// `min_loop_path_m` of travel back; graph pose within
-    /// `place_search_scale` times the loop's search radius `radius_m`,
-    /// the alignment anywhere in that distance, at any rotation) that place the current keyframe elsewhere than the
-    /// loop with `j` does (beyond 1 m or 5°). Alignments that fail the
-    /// residual or weakest-direction test do not count.
-    fn other_place_length(&self, current: usize, j: usize, a: &Alignment, radius_m: f64) -> f64 {
+    /// `place_search_scale` times the loop's search radius, the alignment
+    /// anywhere in that distance, at any rotation) that place the current
+    /// keyframe elsewhere than the loop does (beyond 1 m or 5°). Alignments
+    /// that fail the residual or weakest-direction test do not count.
+    fn other_place_length(&self, current: usize, verified: &VerifiedLoop) -> f64 {
         let c = self.config;
-        let search_m = c.place_search_scale * radius_m;
+        let search_m = c.place_search_scale * verified.radius_m;
         if search_m <= 0.0 {
             return 0.0;
         }
         let nodes = &self.graph.nodes;
         let here = nodes[current];
-        let placed = nodes[j].compose(&a.candidate_from_current);
+        let placed = nodes[verified.candidate].compose(&verified.alignment.candidate_from_current);
         let first = current.saturating_sub(c.submap_keyframes);
-        let current_lines: Vec<LineSegment> =
-            self.local_lines(current, first..=current).into_iter().map(|(l, _)| l).collect();
         let path_here = self.keyframes[current].path_m;
         // One stretch per place: a keyframe close to one searched shortly
         // before it sees the same walls. Only keyframes of the same stretch
@@ -797,10 +803,11 @@ impl LoopClosing {
                 continue;
             }
             searched.push((k, node));
-            let lo = k.saturating_sub(c.submap_keyframes);
-            let hi = (k + c.submap_keyframes).min(first.saturating_sub(1)).max(k);
-            let lines: Vec<LineSegment> =
-                self.local_lines(k, lo..=hi).into_iter().map(|(l, _)| l).collect();
+            let lines: Vec<LineSegment> = self
+                .local_lines(k, self.candidate_stretch(k, first))
+                .into_iter()
+                .map(|(l, _)| l)
+                .collect();
             let prior = AlignmentPrior {
                 candidate_from_current: node.between(&here),
                 radius_m: search_m,
@@ -808,7 +815,8 @@ impl LoopClosing {
                 // for the place to be capped, a copy may lie turned.
                 max_rotation_rad: std::f64::consts::PI,
             };
-            let Some(b) = align_lines(&current_lines, &lines, Some(&prior), &c.alignment) else {
+            let Some(b) = align_lines(&verified.current_lines, &lines, Some(&prior), &c.alignment)
+            else {
                 continue;
             };
             if b.rms_m > c.max_rms_m || b.weakest_direction_m < c.min_weakest_direction_m {
@@ -828,13 +836,12 @@ impl LoopClosing {
     fn confirm_loop(
         &mut self,
         current: usize,
-        j: usize,
-        a: Alignment,
-        see_through: f64,
+        verified: &VerifiedLoop,
         other_place_length_m: f64,
     ) -> usize {
         let c = self.config;
-        let mut r = record(current, j, &a, see_through, LoopOutcome::Unconfirmed);
+        let (j, a) = (verified.candidate, &verified.alignment);
+        let mut r = verified.record(current, LoopOutcome::Unconfirmed);
         r.other_place_length_m = other_place_length_m;
         self.loops.push(r);
         let index = self.loops.len() - 1;
@@ -956,6 +963,24 @@ fn record(
         other_place_length_m: 0.0,
         information: a.information,
         outcome,
+    }
+}
+
+/// The candidate that passed verification, with what the later steps need.
+#[derive(Debug, Clone)]
+struct VerifiedLoop {
+    candidate: usize,
+    alignment: Alignment,
+    see_through: f64,
+    /// The candidate's search radius, metres.
+    radius_m: f64,
+    /// The current keyframe's local lines, its own frame.
+    current_lines: Vec<LineSegment>,
+}
+
+impl VerifiedLoop {
+    fn record(&self, keyframe: usize, outcome: LoopOutcome) -> LoopRecord {
+        record(keyframe, self.candidate, &self.alignment, self.see_through, outcome)
     }
 }
 
