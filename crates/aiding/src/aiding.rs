@@ -121,6 +121,9 @@ pub struct Aiding {
     calibration: SourceCalibration,
     /// The predicted step in the world frame (for the calibration).
     step_world: Vector2<f64>,
+    /// The heading variance the calibration's own uncertainty added to this
+    /// step's prediction, rad² (recovery's threshold leaves it out).
+    calibration_var_heading: f64,
     associations: Vec<Association>,
     /// The sliding window ([`crate::EstimatorConfig::window`]).
     window: Option<PoseWindow>,
@@ -158,6 +161,7 @@ impl Aiding {
                 &config.estimator.calibration.unwrap_or(CalibrationConfig::standard()),
             ),
             step_world: Vector2::zeros(),
+            calibration_var_heading: 0.0,
             associations: Vec::new(),
             window: None,
             pending_step: None,
@@ -354,6 +358,7 @@ impl Aiding {
         // The calibration's own uncertainty over the step.
         self.step_world = Vector2::new(predicted.x() - previous.x(), predicted.y() - previous.y());
         cov[(2, 2)] += var_heading;
+        self.calibration_var_heading = var_heading;
         let len = self.step_world.norm();
         if len > 0.0 {
             let u = self.step_world / len;
@@ -425,6 +430,7 @@ impl Aiding {
             let (pose, report) = self.correct_in_full(predicted, lines);
             (pose, report, true)
         };
+        self.calibration_var_heading = 0.0;
         report.prediction = prediction;
         if fallback.is_some() {
             report.fallback = fallback;
@@ -550,7 +556,12 @@ impl Aiding {
             .map(|m| m.line)
             .collect();
         let seen: Vec<LineSegment> = lines.iter().map(|l| *l.line()).collect();
-        let found = crate::recover(predicted, predicted_cov, &seen, &map, &r)?;
+        // The change is judged against the source's own noise: the
+        // calibration's uncertainty (a latency times a sudden change of turn
+        // rate) would explain a failed source's jump as well as a real one.
+        let mut source_cov = *predicted_cov;
+        source_cov[(2, 2)] -= self.calibration_var_heading.min(source_cov[(2, 2)]);
+        let found = crate::recover(predicted, &source_cov, &seen, &map, &r)?;
         Some((found.world_from_sensor, found.covariance))
     }
 

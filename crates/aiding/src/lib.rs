@@ -121,7 +121,7 @@ pub struct EstimatorConfig {
     pub max_inflation: f64,
     /// Relinearisations of the iterated update.
     pub iterations: usize,
-    /// Estimates the source's heading-rate bias and speed scale error
+    /// Estimates the source's heading-rate bias, speed scale error and latency
     /// ([`CalibrationConfig`]); `None`: the source is taken as calibrated.
     pub calibration: Option<CalibrationConfig>,
     /// Adapts the motion noise to the source at hand from the innovation
@@ -343,6 +343,8 @@ impl EstimatorConfig {
                 ),
                 ("calibration.speed_scale_std", c.speed_scale_std.unwrap_or(0.0)),
                 ("calibration.speed_scale_walk_per_sqrt_m", c.speed_scale_walk_per_sqrt_m),
+                ("calibration.latency_std_s", c.latency_std_s.unwrap_or(0.0)),
+                ("calibration.latency_walk_s_per_sqrt_s", c.latency_walk_s_per_sqrt_s),
             ] {
                 ConfigError::check_field(
                     v >= 0.0 && v.is_finite(),

@@ -387,7 +387,7 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 18] = [
+    const OPTIONAL: [&str; 19] = [
         "map.lifecycle",
         "aiding.estimator.window",
         "aiding.estimator.recovery",
@@ -397,6 +397,7 @@ fn optional_field(path: &str) -> bool {
         "aiding.estimator.calibration",
         "aiding.estimator.calibration.heading_rate_bias_std_rad_s",
         "aiding.estimator.calibration.speed_scale_std",
+        "aiding.estimator.calibration.latency_std_s",
         "detector.noise_estimation",
         "detector.fitting.residual_test",
         "detector.fitting.orientation_test",
