@@ -246,13 +246,56 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
                 )
             } else {
                 String::new()
-            }
+            },
         );
+        if let Some(c) = calibration_summary(mapper.localizer().aiding())
+            .filter(|_| without_odometry < poses.len())
+        {
+            eprintln!("{}: {c}", args.log.display());
+        }
     }
     for p in written.iter().chain(&mcap_path) {
         outln!("{}", p.display())?;
     }
     Ok(())
+}
+
+/// What the estimator learnt of the source's heading-rate bias and latency,
+/// each with its standard deviation; `None` when it estimated neither
+/// (another aiding mode, or no calibration configured). Both need stamped
+/// scans: without them they stay at their priors, and the line says so.
+fn calibration_summary(aiding: &pcaline::aiding::Aiding) -> Option<String> {
+    let config = aiding.config();
+    let c = config.estimator.calibration.filter(|_| config.mode == AidingMode::Estimator)?;
+    let cal = aiding.calibration();
+    let mut parts = Vec::new();
+    let learnt = |var: f64, prior: f64| var < 0.99 * prior * prior;
+    if let Some(prior) = c.heading_rate_bias_std_rad_s {
+        let tail = if learnt(cal.heading_rate_bias_var, prior) { "" } else { " (not learnt)" };
+        parts.push(format!(
+            "heading-rate bias {:.3} ± {:.3} °/s{tail}",
+            rounded(cal.heading_rate_bias_rad_s.to_degrees(), 3),
+            cal.heading_rate_bias_var.sqrt().to_degrees()
+        ));
+    }
+    // The speed scale is left out: it does not learn yet (a known defect,
+    // docs/accuracy.md), so its shrinking variance would claim a certainty
+    // it does not have.
+    if let Some(prior) = c.latency_std_s {
+        let tail = if learnt(cal.latency_var, prior) { "" } else { " (not learnt)" };
+        parts.push(format!(
+            "latency {:.0} ± {:.0} ms{tail}",
+            rounded(1e3 * cal.latency_s, 0),
+            1e3 * cal.latency_var.sqrt()
+        ));
+    }
+    (!parts.is_empty()).then(|| format!("the source's calibration: {}", parts.join(", ")))
+}
+
+/// `x` rounded to `decimals`, with no negative zero.
+fn rounded(x: f64, decimals: i32) -> f64 {
+    let k = 10f64.powi(decimals);
+    (x * k).round() / k + 0.0
 }
 
 /// With loop closure: a last optimization, the trajectory replaced by the
