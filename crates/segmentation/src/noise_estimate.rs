@@ -141,11 +141,13 @@ impl NoiseEstimation {
     }
 }
 
-/// Reusable buffers of [`estimate_range_noise`].
+/// Reusable buffers of [`estimate_range_noise`]: each band's absolute
+/// residuals as the bits of their `f64`s (non-negative finite values order
+/// as their bits do, so the selection compares integers).
 #[derive(Debug, Clone, Default)]
 pub struct NoiseScratch {
-    near: Vec<f64>,
-    far: Vec<f64>,
+    near: Vec<u64>,
+    far: Vec<u64>,
 }
 
 /// Most triples examined per scan: beyond a few hundred the median is
@@ -277,13 +279,14 @@ const INTERLACE_RATIO: f64 = 1.25;
 
 /// The absolute residuals of at most [`MAX_TRIPLES`] triples of beams
 /// `i - gap, i, i + gap` (all three valid returns), split at `far_from_m`
-/// into `near` and `far`; non-finite residuals are left out.
+/// into `near` and `far` as the bits of their `f64`s; non-finite residuals
+/// are left out.
 fn collect_triples(
     points: &ScanPoints,
     far_from_m: f64,
     gap: usize,
-    near: &mut Vec<f64>,
-    far: &mut Vec<f64>,
+    near: &mut Vec<u64>,
+    far: &mut Vec<u64>,
 ) {
     near.clear();
     far.clear();
@@ -293,7 +296,8 @@ fn collect_triples(
     // bounds checks in the loop.
     let (xs, beams, angles) = (&points.range_m[..n], &points.beam[..n], &points.angle_rad[..n]);
     // The half angle is nearly always the same: cache its cosine.
-    let (mut last_half, mut cos_half) = (f64::NAN, 1.0);
+    // Infinite at first, so that the first triple computes it.
+    let (mut last_half, mut cos_half) = (f64::INFINITY, 1.0);
     let mut i = gap;
     while i + gap < n {
         let (a, r, b) = (xs[i - gap], xs[i], xs[i + gap]);
@@ -307,12 +311,13 @@ fn collect_triples(
             // is taken out of line: inlined, the compiler computed it for
             // every triple instead of branching (a third of the estimate's
             // instructions).
-            if (half - last_half).abs() > 1e-12 || last_half.is_nan() {
+            if (half - last_half).abs() > 1e-12 {
                 (last_half, cos_half) = (half, cosine(half));
             }
             let residual = (r - 2.0 * a * b * cos_half / (a + b)).abs();
             if residual.is_finite() {
-                if r < far_from_m { near.push(residual) } else { far.push(residual) }
+                let bits = residual.to_bits();
+                if r < far_from_m { near.push(bits) } else { far.push(bits) }
             }
         }
         i += stride;
@@ -413,13 +418,16 @@ fn grid_step(smallest: f64, divisor: usize) -> f64 {
 /// A median rises 1.6 times when 30% of the triples lie on clutter, edges
 /// or corners; the smaller half's mean 1.47 times, with the spread of a
 /// mean rather than of one order statistic.
-fn band_sigma(residuals: &mut [f64], min_samples: usize) -> Option<f64> {
+///
+/// `residuals` are the bits of non-negative finite `f64`s, which order as
+/// the values do.
+fn band_sigma(residuals: &mut [u64], min_samples: usize) -> Option<f64> {
     if residuals.len() < min_samples {
         return None;
     }
     let half = residuals.len() / 2;
-    residuals.select_nth_unstable_by(half, f64::total_cmp);
-    let mean = residuals[..half].iter().sum::<f64>() / half as f64;
+    residuals.select_nth_unstable(half);
+    let mean = residuals[..half].iter().map(|&b| f64::from_bits(b)).sum::<f64>() / half as f64;
     // The mean of |N(0, 1.5 sigma²)| below its median is
     // 4 (phi(0) - phi(0.6745)) sqrt(1.5) sigma = 0.3247 sqrt(1.5) sigma.
     Some(mean / (0.324_663 * 1.5f64.sqrt()))
