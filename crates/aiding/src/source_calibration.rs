@@ -162,11 +162,10 @@ impl SourceCalibration {
                     // The source's previous pose is the pose `latency`
                     // later: turned by latency * rate and moved by latency
                     // * velocity; its increment carries the change of both.
-                    let (s, c) = (-previous.turn_rad).sin_cos();
-                    let u = previous.velocity_m_s;
-                    let previous_velocity = Vector2::new(c * u.x - s * u.y, s * u.x + c * u.y);
-                    let (s, c) = (tau * previous.rate_rad_s).sin_cos();
-                    t = Vector2::new(c * t.x - s * t.y, s * t.x + c * t.y)
+                    let turned =
+                        |angle: f64, v: &Vector2<f64>| Pose2::new(0.0, 0.0, angle).rotate(v);
+                    let previous_velocity = turned(-previous.turn_rad, &previous.velocity_m_s);
+                    t = turned(tau * previous.rate_rad_s, &t)
                         - (velocity - previous_velocity) * tau;
                 }
                 self.previous_motion = Some(Motion {
@@ -179,10 +178,11 @@ impl SourceCalibration {
                 // increment carries latency times the change of rate.
                 inc = Pose2::new(t.x, t.y, inc.heading() - tau * change);
                 let bias_dt = if config.heading_rate_bias_std_rad_s.is_some() { dt } else { 0.0 };
-                // The latency's uncertainty over the change of rate (a failed
+                // The latency's uncertainty over the change of rate, and its
+                // covariance with the bias, join the bias's (a failed
                 // source's jump widens it too: recovery judges the jump
                 // without it).
-                var_heading = self.heading_rate_bias_var * bias_dt * bias_dt
+                var_heading = var_heading
                     + 2.0 * self.bias_latency_cov * bias_dt * change
                     + self.latency_var * change * change;
             }
