@@ -33,6 +33,13 @@ struct Motion {
 /// A latency beyond this is not a latency error, seconds.
 const MAX_LATENCY_S: f64 = 0.5;
 
+/// A step that turns faster than this (two turns a second, beyond any
+/// platform this crate aids) did not take the time its stamps say: Intel's
+/// GMapping log has eight steps of 10-20 ms that turn 28-34° (25-59 rad/s).
+/// Such a step's duration is not used (as for an unstamped step), so no
+/// rate, bias or latency is taken from it or corrected in it, rad/s.
+pub const MAX_TURN_RATE_RAD_S: f64 = 2.0 * std::f64::consts::TAU;
+
 /// Which systematic errors of the source are estimated, and how uncertain
 /// they are before the first scan.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -99,6 +106,9 @@ pub struct SourceCalibration {
     previous_motion: Option<Motion>,
     /// The change of heading rate the last step was corrected with, rad/s.
     rate_change_rad_s: f64,
+    /// Whether the last step's duration was usable (stamped, positive, and
+    /// not turning faster than [`MAX_TURN_RATE_RAD_S`]).
+    step_timed: bool,
 }
 
 /// A correction of a prior error seen as a measurement of that error: the
@@ -127,19 +137,25 @@ impl SourceCalibration {
             bias_latency_cov: 0.0,
             previous_motion: None,
             rate_change_rad_s: 0.0,
+            step_timed: false,
         }
     }
 
     /// The increment with the estimated errors removed, and the variance
     /// their uncertainty adds to the predicted heading and along the step.
-    /// `dt_s` is the step's duration when known. The random walks are
-    /// added to the variances here.
+    /// `dt_s` is the step's duration when known; a step turning faster
+    /// than [`MAX_TURN_RATE_RAD_S`] over it is taken as unstamped, here and
+    /// in the [`SourceCalibration::observe`] that follows. The random walks
+    /// are added to the variances here.
     pub fn correct(
         &mut self,
         config: &CalibrationConfig,
         increment: &Pose2,
         dt_s: Option<f64>,
     ) -> (Pose2, f64, f64) {
+        let dt_s =
+            dt_s.filter(|dt| *dt > 0.0 && increment.heading().abs() <= MAX_TURN_RATE_RAD_S * dt);
+        self.step_timed = dt_s.is_some();
         let mut inc = *increment;
         let (mut var_heading, mut var_along) = (0.0, 0.0);
         if let (Some(_), Some(dt)) = (config.heading_rate_bias_std_rad_s, dt_s) {
@@ -198,8 +214,9 @@ impl SourceCalibration {
         (inc, var_heading, var_along)
     }
 
-    /// Learns from an accepted update: the heading correction over `dt_s`
-    /// seconds and the translation correction along the predicted step's
+    /// Learns from an accepted update of a step that
+    /// [`SourceCalibration::correct`] took as timed: the heading correction
+    /// over `dt_s` seconds and the translation correction along the predicted step's
     /// world direction `step_world` (metres, its length the step's), with the
     /// prior and posterior pose covariances.
     pub fn observe(
@@ -212,6 +229,9 @@ impl SourceCalibration {
         posterior: &Matrix3<f64>,
     ) {
         let (translation, heading) = correction;
+        // Only a step that [`SourceCalibration::correct`] timed teaches the
+        // bias and latency (not a source's jump, which skips it).
+        let dt_s = dt_s.filter(|_| std::mem::take(&mut self.step_timed));
         if let (Some(dt), Some((z, r))) =
             (dt_s, as_measurement(heading, prior[(2, 2)], posterior[(2, 2)]))
             && dt > 0.0
@@ -324,6 +344,43 @@ mod tests {
         let (inc, _, _) = cal.correct(&config, &Pose2::new(0.0, 0.0, 0.3), Some(dt));
         assert_eq!(inc.heading(), 0.3);
         assert_eq!(cal.latency_s, 0.0);
+    }
+
+    /// Intel's GMapping log has steps 10 ms apart that turn 30°: such a
+    /// step's stamps are not its poses' times. It is neither corrected for
+    /// latency nor learnt from, and the next step's change of rate is not
+    /// taken against it.
+    #[test]
+    fn a_step_turning_faster_than_any_platform_is_taken_as_unstamped() {
+        let config = CalibrationConfig::standard();
+        let mut cal = SourceCalibration::new(&config);
+        cal.latency_s = 0.05;
+        let prior = Matrix3::from_diagonal(&[1e-4, 1e-4, 1e-4].into());
+        let post = Matrix3::from_diagonal(&[1e-4, 1e-4, 1e-6].into());
+        let steady = Pose2::new(0.3, 0.0, 0.02);
+        let _ = cal.correct(&config, &steady, Some(1.0));
+        let glitch = Pose2::new(0.0, 0.0, 30f64.to_radians());
+        let (inc, var_heading, _) = cal.correct(&config, &glitch, Some(0.01));
+        assert_eq!(inc.heading(), glitch.heading());
+        assert_eq!(var_heading, 0.0);
+        let before = cal;
+        cal.observe(
+            &config,
+            Some(0.01),
+            &Vector2::zeros(),
+            (&Vector2::zeros(), 0.1),
+            &prior,
+            &post,
+        );
+        assert_eq!(cal.latency_s, before.latency_s);
+        assert_eq!(cal.heading_rate_bias_rad_s, before.heading_rate_bias_rad_s);
+        // The next step has no rate to change from.
+        let (inc, _, _) = cal.correct(&config, &steady, Some(1.0));
+        assert_eq!(inc.heading(), steady.heading());
+        // The same turn over a second is a turn, corrected for latency.
+        let _ = cal.correct(&config, &steady, Some(1.0));
+        let (inc, _, _) = cal.correct(&config, &glitch, Some(1.0));
+        assert!((inc.heading() - glitch.heading()).abs() > 1e-3, "{inc:?}");
     }
 
     #[test]
