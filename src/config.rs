@@ -67,7 +67,9 @@ impl Config {
     /// ([`NoiseEstimation::standard`]), refusing lines over curved
     /// surfaces ([`pcaline_fitting::StraightnessTest::standard`]), and
     /// cutting lines whose points two lines fit far better, such as a wall
-    /// and its end face ([`pcaline_fitting::KinkTest::standard`]). Untold,
+    /// and its end face ([`pcaline_fitting::KinkTest::standard`]), and
+    /// cutting off the ends of a line that lie on a surface seen edge-on
+    /// ([`pcaline_fitting::EdgeOnEnds::standard`]). Untold,
     /// it finds walls of a 30 mm sensor as well as the detector told 30 mm,
     /// and keeps ranges rounded to 5 cm from shredding walls
     /// (docs/accuracy.md).
@@ -75,6 +77,7 @@ impl Config {
         let mut c = Config::default().with_noise_estimation(NoiseEstimation::standard());
         c.fitting.straightness_test = Some(pcaline_fitting::StraightnessTest::standard());
         c.fitting.kink_test = Some(pcaline_fitting::KinkTest::standard());
+        c.fitting.edge_on_ends = Some(pcaline_fitting::EdgeOnEnds::standard());
         c
     }
 

@@ -387,7 +387,7 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 19] = [
+    const OPTIONAL: [&str; 20] = [
         "map.lifecycle",
         "aiding.estimator.window",
         "aiding.estimator.recovery",
@@ -403,6 +403,7 @@ fn optional_field(path: &str) -> bool {
         "detector.fitting.orientation_test",
         "detector.fitting.straightness_test",
         "detector.fitting.kink_test",
+        "detector.fitting.edge_on_ends",
         "map.max_offset_m",
         "map.max_new_alpha_std_rad",
         "map.merge_gate",

@@ -4,8 +4,8 @@
 //! collinear pieces (eq. 7), and the final tests of each line.
 
 use crate::{
-    FitConfig, KinkTest, Moments, Piece, RunSums, Straightness, best_split, is_elongated,
-    line_from_eigen, merge_adjacent, refine_boundaries, straightness,
+    FitConfig, KinkTest, Moments, Piece, RunSums, Straightness, best_split, edge_on_ends,
+    is_elongated, line_from_eigen, merge_adjacent, refine_boundaries, straightness,
 };
 use pcaline_geometry::{LineSegment, Point2, RangeNoise, ScanPoints};
 use std::ops::Range;
@@ -69,7 +69,9 @@ pub struct LineFits {
 /// the seam when `ring_without_break` (a closed scan read as one cluster);
 /// with [`FitConfig::kink_test`], a line whose points two lines fit
 /// significantly better is cut in two ([`best_split`]), again for each
-/// part; each line is kept when it has enough points and length, passes
+/// part; with [`FitConfig::edge_on_ends`], the end runs of a line that lie
+/// on another surface seen edge-on are cut off ([`edge_on_ends`]), each
+/// part again tested; each line is kept when it has enough points and length, passes
 /// the orientation test, and, when configured, the straightness test
 /// against `noise` (the UTM-30LX-EW datasheet's when `None`).
 ///
@@ -175,6 +177,20 @@ pub fn fit_lines(
                     // finished first and the lines stay in scan order.
                     out.pending.push((k, last, Moments::from_points(&xy[k..=last])));
                     out.pending.push((first, k - 1, Moments::from_points(&xy[first..k])));
+                    continue;
+                }
+            }
+            if let Some(test) = &config.edge_on_ends
+                && last >= first
+                && moments.n == last - first + 1
+            {
+                let sigma = reference_noise.sigma_at(line.centroid().coords.norm());
+                let (start, end) = edge_on_ends(&xy[first..=last], &moments, sigma, test);
+                if start + end > 0 {
+                    // The rest tested again; the ends, returns of a surface
+                    // seen edge-on, make no line.
+                    let (lo, hi) = (first + start, last - end);
+                    out.pending.push((lo, hi, Moments::from_points(&xy[lo..=hi])));
                     continue;
                 }
             }
@@ -296,6 +312,35 @@ mod tests {
         let l = &fits.lines[0];
         assert!(l.line.alpha().abs() < 1e-9 && (l.line.d() - 2.0).abs() < 1e-9, "{:?}", l.line);
         assert_eq!((l.first_point, l.last_point, l.moments.n), (0, 39, 40));
+    }
+
+    /// A wall seen by beams 0.25° apart up to its end, then 7 beams on its
+    /// 10 cm face seen nearly edge-on: with the edge-on test the face's
+    /// returns leave the line, which then lies on the wall.
+    #[test]
+    fn an_end_face_seen_edge_on_leaves_the_wall_line() {
+        use std::f64::consts::FRAC_PI_4;
+        let mut points = ScanPoints::default();
+        for i in 0..47u32 {
+            let b = FRAC_PI_4 + (f64::from(i) - 39.0) * 0.25f64.to_radians();
+            let r = if b <= FRAC_PI_4 + 1e-9 { 1.5 / b.cos() } else { 1.5 / b.sin() };
+            points.xy.push(Point2::new(r * b.sin(), r * b.cos()));
+            points.range_m.push(r);
+            points.angle_rad.push(b);
+            points.beam.push(i);
+        }
+        let n = points.len();
+        let mut fits = LineFits::default();
+        let mut config = FitConfig::default();
+        fit_lines(&points, &[0..n], &mut [0..n], false, &config, None, &mut fits);
+        assert_eq!(fits.lines.len(), 1);
+        assert_eq!(fits.lines[0].last_point, 46);
+        config.edge_on_ends = Some(crate::EdgeOnEnds::standard());
+        fit_lines(&points, &[0..n], &mut [0..n], false, &config, None, &mut fits);
+        assert_eq!(fits.lines.len(), 1, "{:#?}", fits.lines);
+        let l = &fits.lines[0];
+        assert_eq!((l.first_point, l.last_point, l.moments.n), (0, 39, 40));
+        assert!((l.line.d() - 1.5).abs() < 1e-9, "{:?}", l.line);
     }
 
     #[test]

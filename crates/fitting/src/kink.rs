@@ -63,7 +63,7 @@ pub struct RunSums {
 
 impl RunSums {
     #[inline]
-    fn add(&mut self, x: f64, y: f64) {
+    pub(crate) fn add(&mut self, x: f64, y: f64) {
         self.n += 1.0;
         self.x += x;
         self.y += y;
@@ -72,10 +72,36 @@ impl RunSums {
         self.yy += y * y;
     }
 
+    /// The sums of the points of `moments` about their mean.
+    pub(crate) fn about_mean(moments: &crate::Moments) -> RunSums {
+        RunSums {
+            n: moments.n as f64,
+            x: 0.0,
+            y: 0.0,
+            xx: moments.sxx,
+            xy: moments.sxy,
+            yy: moments.syy,
+        }
+    }
+
+    /// The sums of the points in `self` but not in `part` (a run within it,
+    /// about the same origin).
+    #[inline]
+    pub(crate) fn minus(&self, part: &RunSums) -> RunSums {
+        RunSums {
+            n: self.n - part.n,
+            x: self.x - part.x,
+            y: self.y - part.y,
+            xx: self.xx - part.xx,
+            xy: self.xy - part.xy,
+            yy: self.yy - part.yy,
+        }
+    }
+
     /// Sum of squared orthogonal residuals about the best line through
     /// the run: the smaller eigenvalue of its centred scatter matrix.
     #[inline]
-    fn residual_sum(&self) -> f64 {
+    pub(crate) fn residual_sum(&self) -> f64 {
         let inv = 1.0 / self.n;
         let sxx = self.xx - self.x * self.x * inv;
         let sxy = self.xy - self.x * self.y * inv;

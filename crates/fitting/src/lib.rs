@@ -22,6 +22,7 @@
 //! ```
 
 mod corners;
+mod edge_on;
 mod eigen;
 mod elongation;
 mod fit_lines;
@@ -36,6 +37,7 @@ mod residual;
 mod straightness;
 
 pub use corners::refine_boundaries;
+pub use edge_on::{EdgeOnEnds, edge_on_ends};
 pub use eigen::SymmetricEigen2;
 pub use elongation::{elongation_ratio, is_elongated};
 pub use fit_lines::{DetectedLine, LineFits, fit_lines};
@@ -95,6 +97,11 @@ pub struct FitConfig {
     /// ([`KinkTest`], [`best_split`]); `None`: no such cut (paper).
     #[cfg_attr(feature = "serde", serde(default))]
     pub kink_test: Option<KinkTest>,
+    /// A line's end runs that lie on another surface seen edge-on (the end
+    /// face of a wall beside a wall seen head-on) are cut off
+    /// ([`EdgeOnEnds`], [`edge_on_ends`]); `None`: no such cut (paper).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub edge_on_ends: Option<EdgeOnEnds>,
 }
 
 impl FitConfig {
@@ -123,6 +130,7 @@ impl FitConfig {
             orientation_test: None,
             straightness_test: None,
             kink_test: None,
+            edge_on_ends: None,
         }
     }
 
@@ -152,6 +160,7 @@ impl FitConfig {
             orientation_test: Some(OrientationTest { max_std_rad: 2f64.to_radians(), noise }),
             straightness_test: None,
             kink_test: None,
+            edge_on_ends: None,
         }
     }
 
@@ -221,6 +230,16 @@ impl FitConfig {
         if let Some(t) = self.kink_test {
             ConfigError::positive("fitting.kink_test.min_chi2", t.min_chi2)?;
         }
+        if let Some(t) = self.edge_on_ends {
+            ConfigError::check(
+                t.min_points >= 3,
+                "fitting.edge_on_ends.min_points",
+                t.min_points as f64,
+                "must be >= 3",
+            )?;
+            ConfigError::non_negative("fitting.edge_on_ends.min_stall_z", t.min_stall_z)?;
+            ConfigError::non_negative("fitting.edge_on_ends.min_chi2", t.min_chi2)?;
+        }
         if let Some(t) = self.straightness_test {
             ConfigError::non_negative(
                 "fitting.straightness_test.max_bow_sigmas",
@@ -258,5 +277,14 @@ mod tests {
         let mut c = FitConfig::paper();
         c.merge = MergeRule::Angles { alpha_t_rad: -1.0 };
         assert!(c.validate().is_err());
+        let mut c =
+            FitConfig { edge_on_ends: Some(EdgeOnEnds::standard()), ..FitConfig::default() };
+        assert!(c.validate().is_ok());
+        c.edge_on_ends = Some(EdgeOnEnds::new(2, 3.0, 4.0));
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("fitting.edge_on_ends.min_points"), "{e}");
+        c.edge_on_ends = Some(EdgeOnEnds::new(5, f64::NAN, 4.0));
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("fitting.edge_on_ends.min_stall_z"), "{e}");
     }
 }
