@@ -5,7 +5,7 @@
 
 use crate::{
     AidingConfig, AidingMode, CalibrationConfig, Fallback, HeadingWeights, LineMeasurement,
-    NormalConstraint, Prediction, SourceCalibration, StepReport,
+    MAX_TURN_RATE_RAD_S, NormalConstraint, Prediction, SourceCalibration, StepReport,
 };
 use crate::{
     MotionNoise, gate_distance2, heading_correction, iterated_update, joint_consistent, measure,
@@ -456,10 +456,14 @@ impl Aiding {
             (Some(p), Some(dt)) => p.velocity_to(&pose, dt),
             _ => None,
         };
-        self.last_velocity = raw;
-        self.velocity = match (self.velocity, raw) {
-            (Some(v), Some(r)) => Some(v.lerp(&r, 0.25)),
-            (_, r) => r,
+        // A step turning faster than any platform did not take the time its
+        // stamps say (Intel's log has 30° in 10 ms): the last velocity stays.
+        let plausible = raw.filter(|v| v.yaw_rate_radps.abs() <= MAX_TURN_RATE_RAD_S);
+        self.last_velocity = plausible;
+        self.velocity = match (self.velocity, raw, plausible) {
+            (Some(v), _, Some(r)) => Some(v.lerp(&r, 0.25)),
+            (v, Some(_), None) => v,
+            (_, _, r) => r,
         };
         self.corrected = Some(pose);
         report.covariance = self.covariance;
@@ -1149,6 +1153,27 @@ mod tests {
         assert!(pose.x().abs() < 2e-3 && pose.y().abs() < 2e-3, "{pose:?} {report:?}");
         assert!(report.matches >= 3, "{report:?}");
         assert!(report.rejected_joint + report.rejected_gate + report.ambiguous >= 1, "{report:?}");
+    }
+
+    /// Two scans stamped 10 ms apart whose poses differ by 30° (as in
+    /// Intel's GMapping log): the velocity that deskews the next scan is not
+    /// taken from them.
+    #[test]
+    fn a_turn_too_fast_for_its_stamps_leaves_the_velocity() {
+        let mut a = estimator();
+        let mut t = 0.0;
+        for k in 0..5 {
+            let source = Pose2::new(0.1 * k as f64, 0.0, 0.0);
+            a.step_at(t, &source, &room_seen_from(&source));
+            t += 1.0;
+        }
+        let before = a.velocity().expect("stamped steps give a velocity");
+        assert!((before.vx_mps - 0.1).abs() < 0.02, "{before:?}");
+        let turned = Pose2::new(0.4, 0.0, 30f64.to_radians());
+        a.step_at(t - 1.0 + 0.01, &turned, &room_seen_from(&turned));
+        let after = a.velocity().expect("the last velocity stays");
+        assert!(after.yaw_rate_radps.abs() < 1.0, "{after:?}");
+        assert!((after.vx_mps - before.vx_mps).abs() < 1e-12, "{after:?} {before:?}");
     }
 
     #[test]
