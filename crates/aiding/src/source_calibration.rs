@@ -166,7 +166,7 @@ impl SourceCalibration {
         }
         self.rate_change_rad_s = 0.0;
         match (config.latency_std_s, dt_s) {
-            (Some(_), Some(dt)) if dt > 0.0 => {
+            (Some(_), Some(dt)) => {
                 self.latency_var += config.latency_walk_s_per_sqrt_s.powi(2) * dt;
                 let rate = inc.heading() / dt;
                 let velocity = Vector2::new(inc.x(), inc.y()) / dt;

@@ -70,8 +70,8 @@ pub struct LineFits {
 /// with [`FitConfig::kink_test`], a line whose points two lines fit
 /// significantly better is cut in two ([`best_split`]), again for each
 /// part; with [`FitConfig::edge_on_ends`], the end runs of a line that lie
-/// on another surface seen edge-on are cut off ([`edge_on_ends`]), each
-/// part again tested; each line is kept when it has enough points and length, passes
+/// on another surface seen edge-on are dropped ([`edge_on_ends`]) and the
+/// rest tested again; each line is kept when it has enough points and length, passes
 /// the orientation test, and, when configured, the straightness test
 /// against `noise` (the UTM-30LX-EW datasheet's when `None`).
 ///
