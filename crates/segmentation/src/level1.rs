@@ -70,29 +70,39 @@ pub fn level1_clusters(
             // Slices of one length `n`: no bounds checks at `j - 1` and `j`.
             let (angle, range) = (&points.angle_rad[..n], &points.range_m[..n]);
             let xy = &xy[..n];
-            for j in 1..n {
-                let step = (angle[j] - angle[j - 1]).abs();
-                let threshold = cached.threshold(range[j - 1], range[j], step);
-                if (xy[j] - xy[j - 1]).norm_squared() <= threshold * threshold {
-                    continue;
-                }
-                let regular = |a: usize, b: usize| {
-                    (points.angle_rad[b] - points.angle_rad[a]).abs() <= 0.5 * lambda_rad
-                };
-                if grazing
-                    && j >= 2
-                    && regular(j - 2, j - 1)
-                    && regular(j - 1, j)
-                    && continues_line(points, j, sigma_factor, &noise)
-                {
-                    if cut.start == j - 1 {
-                        // Three points on one grazing line: the break before
-                        // the middle one was wrong too.
-                        cut.undo_last();
+            let regular = |a: usize, b: usize| (angle[b] - angle[a]).abs() <= 0.5 * lambda_rad;
+            // Blocks of up to 64 pairs: a first loop without branches (one
+            // the compiler vectorises) flags the pairs that may break, those
+            // farther apart than the threshold of the scan's usual step or
+            // at another step; the second visits only those.
+            let mut j0 = 1;
+            while j0 < n {
+                let len = (n - j0).min(BLOCK);
+                let mut bits = cached.flag_block(xy, range, angle, j0, len);
+                while bits != 0 {
+                    let j = j0 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let step = (angle[j] - angle[j - 1]).abs();
+                    let threshold = cached.threshold(range[j - 1], range[j], step);
+                    if (xy[j] - xy[j - 1]).norm_squared() <= threshold * threshold {
+                        continue;
                     }
-                    continue;
+                    if grazing
+                        && j >= 2
+                        && regular(j - 2, j - 1)
+                        && regular(j - 1, j)
+                        && continues_line(points, j, sigma_factor, &noise)
+                    {
+                        if cut.start == j - 1 {
+                            // Three points on one grazing line: the break before
+                            // the middle one was wrong too.
+                            cut.undo_last();
+                        }
+                        continue;
+                    }
+                    cut.at(j);
                 }
-                cut.at(j);
+                j0 += len;
             }
         }
     }
@@ -216,35 +226,111 @@ pub fn seam_start(points: &ScanPoints, rule: &BreakRule) -> Option<usize> {
     })
 }
 
-/// A rule with its angular factor cached for the last bearing step: in a
-/// scan, consecutive valid beams are almost always one increment apart, so
-/// the trigonometry runs once per distinct step instead of once per point.
+/// Pairs of points a level-1 block covers (one bit each of a `u64`).
+const BLOCK: usize = 64;
+
+/// A rule with its angular factor cached: in a scan, consecutive valid beams
+/// are almost always one increment apart, so the trigonometry runs once for
+/// the scan's usual step (the first pair's) and once per other distinct
+/// step, instead of once per point. A step within 1e-12 rad of the usual one
+/// takes its factor.
 struct CachedRule<'a> {
     rule: &'a BreakRule,
+    /// The usual step and its factor (NaN until the first pair).
+    usual_step: f64,
+    usual_factor: f64,
+    /// The last other step and its factor.
     step: f64,
     factor: f64,
 }
 
 impl<'a> CachedRule<'a> {
     fn new(rule: &'a BreakRule) -> Self {
-        CachedRule { rule, step: f64::NAN, factor: 0.0 }
+        CachedRule { rule, usual_step: f64::NAN, usual_factor: 0.0, step: f64::NAN, factor: 0.0 }
+    }
+
+    /// The factor of a bearing step of `step` radians.
+    #[inline(always)]
+    fn factor(&mut self, step: f64) -> f64 {
+        if self.usual_step.is_nan() {
+            self.usual_step = step;
+            self.usual_factor = self.rule.angular_factor(step);
+        }
+        if (step - self.usual_step).abs() <= 1e-12 {
+            return self.usual_factor;
+        }
+        if (step - self.step).abs() > 1e-12 || self.step.is_nan() {
+            self.step = step;
+            self.factor = self.rule.angular_factor(step);
+        }
+        self.factor
     }
 
     /// The break threshold between points at ranges `r_i` and `r_j`,
     /// `step` radians apart, metres.
     #[inline(always)]
     fn threshold(&mut self, r_i: f64, r_j: f64, step: f64) -> f64 {
-        if (step - self.step).abs() > 1e-12 || self.step.is_nan() {
-            self.step = step;
-            self.factor = self.rule.angular_factor(step);
-        }
-        self.rule.threshold_with_factor(r_i, r_j, self.factor)
+        let factor = self.factor(step);
+        self.rule.threshold_with_factor(r_i, r_j, factor)
     }
 
     #[inline(always)]
     fn is_break(&mut self, points: &ScanPoints, i: usize, j: usize, step: f64) -> bool {
         let t = self.threshold(points.range_m[i], points.range_m[j], step);
         farther_than(points, i, j, t)
+    }
+
+    /// Bit `k` set for each pair `(j - 1, j)`, `j = j0 + k < j0 + len`, that
+    /// is a break under the usual step's threshold or lies at another step
+    /// (`len <= 64`, `j0 >= 1`, `j0 + len <= ` the slices' length). A pair
+    /// whose bit is clear is no break.
+    #[inline(always)]
+    fn flag_block(
+        &mut self,
+        xy: &[pcaline_geometry::Point2<f64>],
+        range: &[f64],
+        angle: &[f64],
+        j0: usize,
+        len: usize,
+    ) -> u64 {
+        let BreakRule::Adaptive { sigma_factor, noise, .. } = *self.rule else {
+            return if len == BLOCK { u64::MAX } else { (1u64 << len) - 1 };
+        };
+        let usual = self.usual_step_from(angle[j0] - angle[j0 - 1]);
+        let factor = self.usual_factor;
+        if factor == f64::NEG_INFINITY {
+            // Even the usual step is a wide gap: every pair to the slow path.
+            return if len == BLOCK { u64::MAX } else { (1u64 << len) - 1 };
+        }
+        let (near, far, far_from) =
+            (sigma_factor * noise.near_sigma_m, sigma_factor * noise.far_sigma_m, noise.far_from_m);
+        let (xy, range, angle) =
+            (&xy[j0 - 1..j0 + len], &range[j0 - 1..j0 + len], &angle[j0 - 1..j0 + len]);
+        let mut flags = [false; BLOCK];
+        for (k, flag) in flags[..len].iter_mut().enumerate() {
+            let (r_i, r_j) = (range[k], range[k + 1]);
+            let slack = if r_i.max(r_j) < far_from { near } else { far };
+            let threshold = r_i.min(r_j) * factor + slack;
+            let d = xy[k + 1] - xy[k];
+            let other_step = ((angle[k + 1] - angle[k]).abs() - usual).abs() > 1e-12;
+            *flag = (d.x * d.x + d.y * d.y > threshold * threshold) | other_step;
+        }
+        // Eight flags (bytes of 0 or 1) at a time into eight bits: the
+        // multiplication gathers byte `i`'s low bit into bit `56 + i`.
+        let mut bits = 0u64;
+        for (c, chunk) in flags.chunks_exact(8).enumerate() {
+            let bytes = u64::from_le_bytes(std::array::from_fn(|i| u8::from(chunk[i])));
+            bits |= (bytes.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * c);
+        }
+        bits
+    }
+
+    /// The usual step, set from `first_step` (its magnitude) if not yet set.
+    fn usual_step_from(&mut self, first_step: f64) -> f64 {
+        if self.usual_step.is_nan() {
+            self.factor(first_step.abs());
+        }
+        self.usual_step
     }
 }
 
@@ -379,5 +465,35 @@ mod tests {
         assert!(b.contains(&10), "{b:?}");
         assert!(!continues_line(&p, 10, 3.0, &pcaline_geometry::RangeNoise::constant(0.01)));
         assert!(continues_line(&p, 9, 3.0, &pcaline_geometry::RangeNoise::constant(0.01)));
+    }
+
+    proptest::proptest! {
+        /// The blocks' branch-free screen misses no break: without the
+        /// grazing continuation, the breaks are exactly the pairs the rule
+        /// breaks one by one, across block boundaries, gaps of invalid
+        /// beams (another bearing step) and a first pair over a gap.
+        #[test]
+        fn blocks_find_the_breaks_the_rule_finds_pair_by_pair(
+            ranges in proptest::collection::vec(
+                proptest::prop_oneof![8 => 0.5f32..3.0, 1 => proptest::strategy::Just(f32::NAN)],
+                0..300,
+            ),
+        ) {
+            let scan = Scan::new(-2.0, 0.25f32.to_radians(), 0.1, 30.0, ranges);
+            let p = points_of(&scan);
+            let rule = adaptive(false);
+            let (mut b, mut c) = (vec![], vec![]);
+            level1_clusters(&p, &rule, 5, &mut b, &mut c);
+            let mut expected: Vec<usize> = (1..p.len())
+                .filter(|&j| {
+                    let step = (p.angle_rad[j] - p.angle_rad[j - 1]).abs();
+                    is_break(&p, j - 1, j, step, &rule)
+                })
+                .collect();
+            if !p.is_empty() {
+                expected.insert(0, 0);
+            }
+            proptest::prop_assert_eq!(b, expected);
+        }
     }
 }
