@@ -117,13 +117,15 @@ fn csail_raw_odometry_heading_is_ahead_of_the_estimator_alone() {
     let e = rigidly_aligned_trajectory_errors(&picked, &reference).unwrap();
     let first = aligned_trajectory_errors(&picked, &reference).unwrap();
     // One draw (the sensitivity tests below): its bounds hold for the log
-    // as it is, not for every perturbation of it. With the source's
-    // latency estimated (0.1 s on this log) it is one of the worse draws:
-    // the sensitivity runs range 8.0-11.9° rigid.
+    // as it is, not for every perturbation of it (the sensitivity runs
+    // range 9.5-17.7° rigid).
     // Rigidly aligned: the estimator alone 14.0° / 6.3 m, raw odometry
-    // 22.1° / 8.7 m. Measured with loops: 13.2° / 4.3 m rigid, 14.9° at
-    // the first pair, 13 loops standing (docs/accuracy.md).
-    assert!(checked >= 10, "{checked} of {accepted} loops checked");
+    // 22.1° / 8.7 m. Measured with loops: 12.9° / 3.1 m rigid, 13.3° at
+    // the first pair, 9 loops checked here (docs/accuracy.md). With the
+    // chain's noise floored at a quarter of the wheel-odometry model
+    // (before 2026-12-04): 13.2° / 4.3 m and 13 loops; at the learnt scale
+    // the optimizer switches more loops off, nearly all of them wrong.
+    assert!(checked >= 7, "{checked} of {accepted} loops checked");
     assert!(e.heading_rms_rad.to_degrees() < 14.0, "{e:?}");
     assert!(first.heading_rms_rad.to_degrees() < 16.0, "{first:?}");
     assert!(e.position_rms_m < 5.0, "{e:?}");
@@ -182,25 +184,29 @@ fn csail_loop_closure_is_ahead_over_the_sensitivity_runs() {
     let runs = csail_sensitivity_runs(&dir, LoopClosureConfig::standard());
     let mean = |f: fn(&SeedRun) -> f64| runs.iter().map(f).sum::<f64>() / runs.len() as f64;
     let (with_loops, alone) = (mean(|r| r.with_loops_deg), mean(|r| r.alone_deg));
-    // Measured (seeds 1-8): with loops 9.6° mean (8.0-11.9°), the
-    // estimator alone 15.9° (12.7-19.0°); raw odometry 22.1°. Before the
-    // source's latency was estimated: 14.9° (10.3-18.8°) and 16.1°.
+    // Measured (seeds 1-8): with loops 13.1° mean (9.5-17.7°), the
+    // estimator alone 15.9° (12.7-19.0°); raw odometry 22.1°. With the
+    // chain's noise floored at a quarter of the wheel-odometry model
+    // (before 2026-12-04): 9.6° (8.0-11.9°) with loops; before the source's
+    // latency was estimated: 14.9° (10.3-18.8°) and 16.1°.
     assert!(with_loops < alone, "with loops {with_loops:.2}°, alone {alone:.2}°");
-    assert!(with_loops < 12.0, "with loops {with_loops:.2}°");
+    assert!(with_loops < 14.5, "with loops {with_loops:.2}°");
     for r in &runs {
         assert!(r.loops.standing >= 5, "seed {}: {:?}", r.seed, r.loops);
     }
 }
 
-/// Known defect (issue "Globally consistent line maps"): in 7 of the 8
+/// Known defect (issue "Globally consistent line maps"): in 5 of the 8
 /// sensitivity runs, and on the log as it is, a pair of loops stands that
-/// the corrected poses contradict by 1.8-2.6 m: two neighbouring keyframes
+/// the corrected poses contradict by 2.0-2.7 m: two neighbouring keyframes
 /// aligned to a look-alike place along a repeated corridor where the
-/// drifted estimate lies, each confirming the other. (Before the source's
-/// latency was estimated, 6 of 8, up to 12.5 m.) Run with `cargo test
+/// drifted estimate lies, each confirming the other. (7 of 8 with the
+/// chain's noise floored at a quarter of the wheel-odometry model, before
+/// 2026-12-04; before the source's latency was estimated, 6 of 8, up to
+/// 12.5 m.) Run with `cargo test
 /// --release --test loop_closure -- --ignored`.
 #[test]
-#[ignore = "known defect: false loops stand in 7 of 8 sensitivity runs"]
+#[ignore = "known defect: false loops stand in 5 of 8 sensitivity runs"]
 fn csail_no_false_loop_stands_in_any_sensitivity_run() {
     let Some(dir) = data("mit-csail") else { return };
     for r in csail_sensitivity_runs(&dir, LoopClosureConfig::standard()) {
@@ -244,6 +250,33 @@ fn csail_own_poses_stay_where_they_are() {
     // Measured: 0.53° / 0.059 m (the estimator alone 0.58° / 0.11 m).
     assert!(e.heading_rms_rad.to_degrees() < 1.0, "{e:?}");
     assert!(e.position_rms_m < 0.10, "{e:?}");
+}
+
+/// Issue "Aiding that does no harm": the default `pcaline map` (estimator
+/// and loop closure) fed Intel's own GMapping-corrected poses must move them
+/// by at most 1° heading rms and 0.10 m position rms. Intel's loops are many
+/// (about 150), and a chain looser than the source deserves let the few
+/// wrong ones bend it (0.82° / 0.18 m with the chain's noise floored at a
+/// quarter of the wheel-odometry model, before 2026-12-04).
+#[test]
+fn intel_own_poses_stay_where_they_are() {
+    let Some(dir) = data("intel") else { return };
+    let log = dir.join("intel.gfs.log");
+    let source: Vec<Pose2> = CarmenReader::open(&log, CarmenOptions::default())
+        .unwrap()
+        .filter_map(|r| match r.unwrap() {
+            LogRecord::Scan(s) => s.pose,
+            _ => None,
+        })
+        .collect();
+    let (poses, slam) = run(&log, |s| s.pose.unwrap());
+    let e = trajectory_errors(&poses, &source).unwrap();
+    // Measured: 0.41° / 0.070 m, 148 loops standing (the estimator alone
+    // 0.61° / 0.148 m).
+    assert!(e.heading_rms_rad.to_degrees() < 1.0, "{e:?}");
+    assert!(e.position_rms_m < 0.10, "{e:?}");
+    let standing = slam.loops().iter().filter(|l| l.outcome == LoopOutcome::Accepted).count();
+    assert!(standing >= 50, "{standing} loops standing");
 }
 
 /// The shipped large building (a generated 40 x 30 cell maze of identical

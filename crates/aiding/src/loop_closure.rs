@@ -56,9 +56,6 @@ const PLACE_SPACING_M: f64 = 1.5;
 /// ... and turned by less than this, radians (45°), is skipped.
 const PLACE_SPACING_RAD: f64 = 0.785;
 
-/// The sequential edges' noise scale never goes below this: the estimator's
-/// own corrections against its map are not in its motion model.
-const MIN_CHAIN_SCALE: f64 = 0.25;
 use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Vector3, wrap_angle};
 use pcaline_mapping::{LineMap, MapConfig};
 
@@ -561,11 +558,14 @@ impl LoopClosing {
             (Some(k), Some(prev)) => {
                 let rel = k.between(&pose);
                 // The motion model at the scale the estimator has learnt
-                // for this source (`NoiseAdaptation`): a good source's chain
-                // is tight, and so is the loop search around it.
+                // for this source (`NoiseAdaptation`, whose own floor is the
+                // only one): a good source's chain is tight, and so is the
+                // loop search around it, and a loop the chain contradicts is
+                // switched off instead of bending it. (A second floor, a
+                // quarter of the model, let Intel's loops move its good
+                // poses 0.18 m; docs/accuracy.md.)
                 let cov = self.aiding.config().estimator.motion.covariance(&rel)
-                    * (step.report.motion_noise_scale.max(MIN_CHAIN_SCALE)
-                        * self.config.sequential_variance_scale);
+                    * (step.report.motion_noise_scale * self.config.sequential_variance_scale);
                 self.graph.add_edge(node - 1, node, rel, cov, EdgeKind::Sequential);
                 (
                     prev.path_m + rel.x().hypot(rel.y()),
