@@ -1052,8 +1052,13 @@ mod tests {
 
     /// The room's walls seen from `world_from_sensor` (sensor frame).
     fn room_seen_from(world_from_sensor: &Pose2) -> Vec<SensorLine> {
+        walls_seen_from(&room(), world_from_sensor)
+    }
+
+    /// World-frame `walls` as the sensor at `world_from_sensor` sees them.
+    fn walls_seen_from(walls: &[SensorLine], world_from_sensor: &Pose2) -> Vec<SensorLine> {
         let sensor_from_world = world_from_sensor.inverse();
-        room()
+        walls
             .iter()
             .map(|l| SensorLine {
                 line: l.line.transformed(&sensor_from_world),
@@ -1187,21 +1192,12 @@ mod tests {
     #[test]
     fn lidar_only_uncertainty_along_a_corridor_grows_slowly() {
         let corridor = [wall((-30.0, 1.0), (30.0, 1.0)), wall((-30.0, -1.0), (30.0, -1.0))];
-        let seen_from = |world_from_sensor: &Pose2| -> Vec<SensorLine> {
-            let sensor_from_world = world_from_sensor.inverse();
-            corridor
-                .iter()
-                .map(|l| SensorLine {
-                    line: l.line.transformed(&sensor_from_world),
-                    moments: l.moments.transformed(&sensor_from_world),
-                })
-                .collect()
-        };
         let mut a = estimator();
         let mut along = 0.0;
         for k in 0..80 {
             let truth = Pose2::new(0.025 * k as f64, 0.0, 0.0);
-            let (pose, report) = a.step_without_source(Some(0.025 * k as f64), &seen_from(&truth));
+            let (pose, report) =
+                a.step_without_source(Some(0.025 * k as f64), &walls_seen_from(&corridor, &truth));
             assert!((pose.y() - truth.y()).abs() < 0.01, "scan {k}: {pose:?}");
             along = report.covariance[(0, 0)].sqrt();
         }

@@ -293,14 +293,16 @@ impl<'a> CachedRule<'a> {
         j0: usize,
         len: usize,
     ) -> u64 {
+        let every_pair = if len == BLOCK { u64::MAX } else { (1u64 << len) - 1 };
         let BreakRule::Adaptive { sigma_factor, noise, .. } = *self.rule else {
-            return if len == BLOCK { u64::MAX } else { (1u64 << len) - 1 };
+            return every_pair;
         };
-        let usual = self.usual_step_from(angle[j0] - angle[j0 - 1]);
-        let factor = self.usual_factor;
+        // The first call sets the usual step, from the scan's first pair.
+        self.factor((angle[j0] - angle[j0 - 1]).abs());
+        let (usual, factor) = (self.usual_step, self.usual_factor);
         if factor == f64::NEG_INFINITY {
             // Even the usual step is a wide gap: every pair to the slow path.
-            return if len == BLOCK { u64::MAX } else { (1u64 << len) - 1 };
+            return every_pair;
         }
         let (near, far, far_from) =
             (sigma_factor * noise.near_sigma_m, sigma_factor * noise.far_sigma_m, noise.far_from_m);
@@ -323,14 +325,6 @@ impl<'a> CachedRule<'a> {
             bits |= (bytes.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * c);
         }
         bits
-    }
-
-    /// The usual step, set from `first_step` (its magnitude) if not yet set.
-    fn usual_step_from(&mut self, first_step: f64) -> f64 {
-        if self.usual_step.is_nan() {
-            self.factor(first_step.abs());
-        }
-        self.usual_step
     }
 }
 
