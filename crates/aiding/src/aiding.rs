@@ -13,7 +13,9 @@ use crate::{
 };
 use crate::{PoseWindow, WindowStep};
 use pcaline_fitting::Moments;
-use pcaline_geometry::{ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2};
+use pcaline_geometry::{
+    ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2, Vector3,
+};
 use pcaline_mapping::{LineId, LineMap, LineStatus, MapConfig, MapLine, MatchGate};
 
 /// A detected line in the sensor frame with the moments of its points.
@@ -190,6 +192,7 @@ impl Aiding {
         let (s, c) = new_world_from_old.heading().sin_cos();
         let rotation = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
         self.covariance = rotation * self.covariance * rotation.transpose();
+        self.calibration.pose_scale_cov = rotation * self.calibration.pose_scale_cov;
         self.window = None;
     }
 
@@ -367,6 +370,9 @@ impl Aiding {
             let u = self.step_world / len;
             let mut t = cov.fixed_view_mut::<2, 2>(0, 0);
             t += u * u.transpose() * var_along;
+        }
+        if let Some(c) = e.calibration {
+            self.calibration.propagate_pose_scale(&c, &self.step_world, !jumped, &mut cov);
         }
         if !predicted.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
@@ -720,20 +726,24 @@ impl Aiding {
             pcaline_geometry::wrap_angle(update.pose.heading() - predicted.heading());
         // A recovered step's correction is the source's failure, not its
         // calibration error: the calibration does not learn from it.
+        report.translation_correction_m =
+            Vector2::new(update.pose.x() - predicted.x(), update.pose.y() - predicted.y());
         if let Some(c) = e.calibration.filter(|_| report.recovery.is_none()) {
-            // Known defect (docs/accuracy.md): the translation correction is
-            // still zero here, so the speed scale does not learn.
             self.calibration.observe(
                 &c,
                 self.step_dt(),
-                &self.step_world,
-                (&report.translation_correction_m, report.heading_correction_rad),
+                report.heading_correction_rad,
+                predicted_cov,
+                &update.covariance,
+            );
+            let t = report.translation_correction_m;
+            self.calibration.observe_pose(
+                &c,
+                &Vector3::new(t.x, t.y, report.heading_correction_rad),
                 predicted_cov,
                 &update.covariance,
             );
         }
-        report.translation_correction_m =
-            Vector2::new(update.pose.x() - predicted.x(), update.pose.y() - predicted.y());
         report.constrained_directions = constrained_directions(&update.covariance, predicted_cov);
         self.covariance = update.covariance;
         (update.pose, report, true)
@@ -1145,6 +1155,37 @@ mod tests {
             "heading error once the bias is learnt {:.3}°",
             late.to_degrees()
         );
+    }
+
+    /// A source whose steps are 3% too long (a wheel diameter off), back
+    /// and forth in a room whose walls fix the position: the scale is
+    /// learnt from the position corrections it causes, through its
+    /// covariance with the pose, and once it is, the pose keeps to the
+    /// truth.
+    #[test]
+    fn the_estimator_learns_a_speed_scale_error_from_position_corrections() {
+        let mut a = estimator();
+        let mut late: f64 = 0.0;
+        let (mut x, mut source_x, mut dx) = (0.0, 0.0, 0.02);
+        for k in 0..400 {
+            if !(-1.0..=1.0).contains(&(x + dx)) {
+                dx = -dx;
+            }
+            x += dx;
+            source_x += 1.03 * dx;
+            let truth = Pose2::new(x, 0.0, 0.0);
+            let source = Pose2::new(source_x, 0.0, 0.0);
+            let (pose, _) = a.step_at(0.1 * k as f64, &source, &room_seen_from(&truth));
+            if k >= 200 {
+                late = late.max((pose.x() - truth.x()).hypot(pose.y() - truth.y()));
+            }
+        }
+        // Measured: 2.83% (sigma 0.31%).
+        let c = a.calibration();
+        assert!((c.speed_scale_error - 0.03).abs() < 0.005, "{c:?}");
+        // Measured: 6.7 mm; 14.1 mm before the scale learnt (2026-12-04),
+        // and unaided the position drifts 3 cm each way.
+        assert!(late < 0.01, "worst position error over the last 200 steps {late:.4} m");
     }
 
     #[test]
