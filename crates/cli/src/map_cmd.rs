@@ -260,10 +260,12 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-/// What the estimator learnt of the source's heading-rate bias and latency,
-/// each with its standard deviation; `None` when it estimated neither
-/// (another aiding mode, or no calibration configured). Both need stamped
-/// scans: without them they stay at their priors, and the line says so.
+/// What the estimator learnt of the source's heading-rate bias, speed scale
+/// error and latency, each with its standard deviation; `None` when it
+/// estimated none (another aiding mode, or no calibration configured). The
+/// bias and the latency need stamped scans, the scale travel past walls
+/// across it: without them they stay at their priors, and the line says
+/// so.
 fn calibration_summary(aiding: &pcaline::aiding::Aiding) -> Option<String> {
     let config = aiding.config();
     let c = config.estimator.calibration.filter(|_| config.mode == AidingMode::Estimator)?;
@@ -278,9 +280,14 @@ fn calibration_summary(aiding: &pcaline::aiding::Aiding) -> Option<String> {
             cal.heading_rate_bias_var.sqrt().to_degrees()
         ));
     }
-    // The speed scale is left out: it does not learn yet (a known defect,
-    // docs/accuracy.md), so its shrinking variance would claim a certainty
-    // it does not have.
+    if let Some(prior) = c.speed_scale_std {
+        let tail = if learnt(cal.speed_scale_var, prior) { "" } else { " (not learnt)" };
+        parts.push(format!(
+            "speed scale error {:.2} ± {:.2} %{tail}",
+            rounded(100.0 * cal.speed_scale_error, 2),
+            100.0 * cal.speed_scale_var.sqrt()
+        ));
+    }
     if let Some(prior) = c.latency_std_s {
         let tail = if learnt(cal.latency_var, prior) { "" } else { " (not learnt)" };
         parts.push(format!(
