@@ -371,11 +371,11 @@ impl Aiding {
             let mut t = cov.fixed_view_mut::<2, 2>(0, 0);
             t += u * u.transpose() * var_along;
         }
-        if let Some(c) = e.calibration {
-            self.calibration.propagate_pose_scale(&c, &self.step_world, !jumped, &mut cov);
-        }
         if !predicted.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
+        }
+        if let Some(c) = e.calibration {
+            self.calibration.propagate_pose_scale(&c, &self.step_world, !jumped, &mut cov);
         }
         self.process(predicted, cov, prediction, fallback, lines)
     }

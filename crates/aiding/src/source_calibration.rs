@@ -289,7 +289,8 @@ impl SourceCalibration {
     /// and the previous pose's heading error turns the step (the motion
     /// Jacobian). Edge cases: with the scale off, or a step the scale did
     /// not correct (`scaled` false: a source's jump, no source), only the
-    /// heading's lever arm carries the covariance.
+    /// heading's lever arm carries the covariance; a step whose terms are
+    /// not finite resets the covariance to zero and adds nothing.
     pub fn propagate_pose_scale(
         &mut self,
         config: &CalibrationConfig,
@@ -299,13 +300,25 @@ impl SourceCalibration {
     ) {
         let c = self.pose_scale_cov;
         let turned = Vector3::new(c.x - step_world.y * c.z, c.y + step_world.x * c.z, c.z);
+        if !turned.iter().all(|v| v.is_finite()) {
+            // A step too large to carry (a source's 1e300 m): the
+            // correlation is forgotten, never made NaN.
+            self.pose_scale_cov = Vector3::zeros();
+            return;
+        }
         if config.speed_scale_std.is_none() || !scaled {
             self.pose_scale_cov = turned;
             return;
         }
         let g = Vector3::new(-step_world.x, -step_world.y, 0.0);
-        *covariance += turned * g.transpose() + g * turned.transpose();
-        self.pose_scale_cov = turned + g * self.speed_scale_var;
+        let cross = turned * g.transpose() + g * turned.transpose();
+        let next = turned + g * self.speed_scale_var;
+        if cross.iter().all(|v| v.is_finite()) && next.iter().all(|v| v.is_finite()) {
+            *covariance += cross;
+            self.pose_scale_cov = next;
+        } else {
+            self.pose_scale_cov = Vector3::zeros();
+        }
     }
 
     /// Learns the speed scale from an accepted pose correction
@@ -470,6 +483,24 @@ mod tests {
         cal.propagate_pose_scale(&off, &Vector2::new(0.1, 0.0), true, &mut prior);
         cal.observe_pose(&off, &Vector3::new(0.01, 0.0, 0.0), &prior, &(prior * 0.5));
         assert_eq!(prior, Matrix3::identity());
+        assert_eq!(cal.speed_scale_error, 0.0);
+    }
+
+    #[test]
+    fn steps_too_large_to_carry_never_make_nan() {
+        let config = CalibrationConfig::standard();
+        let mut cal = SourceCalibration::new(&config);
+        cal.pose_scale_cov = Vector3::new(1e-4, 0.0, 1e-5);
+        for step in [Vector2::new(1e300, 1e300), Vector2::new(f64::NAN, 0.0)] {
+            let mut covariance = Matrix3::identity();
+            cal.propagate_pose_scale(&config, &step, true, &mut covariance);
+            assert_eq!(covariance, Matrix3::identity());
+            assert_eq!(cal.pose_scale_cov, Vector3::zeros());
+            cal.pose_scale_cov = Vector3::new(1e-4, 0.0, 1e-5);
+        }
+        // A non-finite correction teaches nothing.
+        let prior = Matrix3::identity();
+        cal.observe_pose(&config, &Vector3::new(f64::NAN, 0.0, 0.0), &prior, &(prior * 0.5));
         assert_eq!(cal.speed_scale_error, 0.0);
     }
 
