@@ -329,8 +329,14 @@ impl Aiding {
             }
             _ => (self.last_motion.unwrap_or_default(), e.constant_velocity),
         };
-        let (predicted, cov) = predict(&previous, &self.covariance, &motion, &noise);
+        let (predicted, mut cov) = predict(&previous, &self.covariance, &motion, &noise);
         self.pending_step = Some((motion, noise.covariance(&motion)));
+        if let Some(c) = e.calibration {
+            // No source step to scale: the pose-scale covariance only turns
+            // with the pose.
+            let step = Vector2::new(predicted.x() - previous.x(), predicted.y() - previous.y());
+            self.calibration.propagate_pose_scale(&c, &step, false, &mut cov);
+        }
         self.process(predicted, cov, Prediction::ConstantVelocity, None, lines)
     }
 
