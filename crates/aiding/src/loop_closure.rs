@@ -511,14 +511,43 @@ impl LoopClosing {
         &self.config
     }
 
-    /// Every scan's `world_from_sensor` as the graph now places it: its
-    /// keyframe's node composed with the scan's pose relative to it. After
-    /// a final [`LoopClosing::optimize`], this is the optimized trajectory.
-    /// A scan before the first keyframe (its pose was not finite) has none.
+    /// Every scan's `world_from_sensor` as the graph now places it. After a
+    /// final [`LoopClosing::optimize`], this is the optimized trajectory.
+    ///
+    /// A scan between keyframes `k` and `k + 1` is placed from both: its
+    /// keyframe's node composed with the scan's pose relative to it, and the
+    /// next node composed back along the sequential edge between them; the
+    /// two are blended by the scan's place between the keyframes (its index),
+    /// so that the optimization's correction changes smoothly along the path
+    /// instead of jumping at each keyframe. When the optimized nodes agree
+    /// with the edge, both placements are the same. A scan after the last
+    /// keyframe, or whose keyframe has no sequential edge to the next (the
+    /// source jumped), is placed from its keyframe alone. A scan before the
+    /// first keyframe (its pose was not finite) has none.
     pub fn trajectory(&self) -> Vec<Option<Pose2>> {
+        let nodes = &self.graph.nodes;
+        // The measured `k_from_next` of each keyframe's sequential edge.
+        let mut to_next: Vec<Option<Pose2>> = vec![None; nodes.len()];
+        for e in &self.graph.edges {
+            if e.kind == EdgeKind::Sequential && e.to == e.from + 1 {
+                to_next[e.from] = Some(e.from_from_to);
+            }
+        }
         self.scans
             .iter()
-            .map(|s| s.and_then(|(k, rel)| self.graph.nodes.get(k).map(|n| n.compose(&rel))))
+            .enumerate()
+            .map(|(scan, s)| {
+                let (k, rel) = (*s)?;
+                let from_keyframe = nodes.get(k)?.compose(&rel);
+                let next = to_next[k].zip(nodes.get(k + 1)).zip(self.keyframes.get(k + 1));
+                let Some(((k_from_next, next_node), next_keyframe)) = next else {
+                    return Some(from_keyframe);
+                };
+                let first = self.keyframes[k].scan;
+                let w = (scan - first) as f64 / (next_keyframe.scan - first).max(1) as f64;
+                let from_next = next_node.compose(&k_from_next.inverse().compose(&rel));
+                Some(blend(&from_keyframe, &from_next, w))
+            })
             .collect()
     }
 
@@ -1010,6 +1039,16 @@ fn loop_covariance(
     }
 }
 
+/// The pose a fraction `w` of the way from `a` to `b`: positions blended
+/// linearly, headings along the shorter arc. `w` 0 gives `a`, 1 gives `b`.
+fn blend(a: &Pose2, b: &Pose2, w: f64) -> Pose2 {
+    Pose2::new(
+        a.x() + w * (b.x() - a.x()),
+        a.y() + w * (b.y() - a.y()),
+        wrap_angle(a.heading() + w * wrap_angle(b.heading() - a.heading())),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1180,6 +1219,47 @@ mod tests {
         // The next scan in order is processed and becomes a keyframe.
         let step = slam.step_at(2.0, &turned, &seen(&walls, &turned));
         assert_eq!(step.keyframe, Some(1));
+    }
+
+    /// Scans between two keyframes take the optimization's correction in
+    /// proportion to their place between them: the trajectory does not jump
+    /// at the next keyframe, and agrees with the old placement when the
+    /// nodes agree with their edge.
+    #[test]
+    fn scans_between_keyframes_blend_the_two_corrections() {
+        let walls = room(0.0);
+        let mut slam = LoopClosing::new(
+            AidingConfig::estimator(),
+            MapConfig::default(),
+            LoopClosureConfig::standard(),
+        )
+        .unwrap();
+        // A keyframe each 0.5 m: scans at 0, 0.1, ..., 0.5 m along x.
+        for k in 0..=5 {
+            let p = Pose2::new(-1.0 + 0.1 * k as f64, 0.5, 0.0);
+            slam.step_at(k as f64, &p, &seen(&walls, &p));
+        }
+        assert_eq!(slam.keyframes().iter().map(|k| k.scan).collect::<Vec<_>>(), [0, 5]);
+        let before = slam.trajectory();
+        // Nodes that agree with their edge: the same placement as before.
+        let moved = Pose2::new(0.3, -0.2, 0.1);
+        slam.graph.nodes = slam.graph.nodes.iter().map(|n| moved.compose(n)).collect();
+        for (b, a) in before.iter().zip(slam.trajectory()) {
+            let (b, a) = (moved.compose(&b.unwrap()), a.unwrap());
+            assert!((b.x() - a.x()).abs() < 1e-9 && (b.y() - a.y()).abs() < 1e-9, "{a:?} {b:?}");
+        }
+        // The second keyframe moved 10 cm and 0.02 rad against its edge: the
+        // scans between take 0, 1/5, ..., 4/5 of that move.
+        let shift = Pose2::new(0.0, 0.1, 0.02);
+        slam.graph.nodes[1] = slam.graph.nodes[1].compose(&shift);
+        let after = slam.trajectory();
+        let base: Vec<Pose2> = before.iter().map(|p| moved.compose(&p.unwrap())).collect();
+        for (k, (a, b)) in after.iter().zip(&base).enumerate().take(5) {
+            let turn = wrap_angle(a.unwrap().heading() - b.heading());
+            assert!((turn - 0.02 * k as f64 / 5.0).abs() < 1e-9, "scan {k}: {turn}");
+        }
+        let (last, next) = (after[4].unwrap(), after[5].unwrap());
+        assert!(last.between(&next).x().hypot(last.between(&next).y()) < 0.12, "{last:?} {next:?}");
     }
 
     #[test]
