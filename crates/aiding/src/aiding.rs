@@ -121,8 +121,6 @@ pub struct Aiding {
     last_velocity: Option<Twist2>,
     /// The source's systematic errors.
     calibration: SourceCalibration,
-    /// The predicted step in the world frame (for the calibration).
-    step_world: Vector2<f64>,
     /// The heading variance the calibration's own uncertainty added to this
     /// step's prediction, rad² (recovery's threshold leaves it out).
     calibration_var_heading: f64,
@@ -162,7 +160,6 @@ impl Aiding {
             calibration: SourceCalibration::new(
                 &config.estimator.calibration.unwrap_or(CalibrationConfig::standard()),
             ),
-            step_world: Vector2::zeros(),
             calibration_var_heading: 0.0,
             associations: Vec::new(),
             window: None,
@@ -334,8 +331,8 @@ impl Aiding {
         if let Some(c) = e.calibration {
             // No source step to scale: the pose-scale covariance only turns
             // with the pose.
-            let step = Vector2::new(predicted.x() - previous.x(), predicted.y() - previous.y());
-            self.calibration.propagate_pose_scale(&c, &step, false, &mut cov);
+            let step_world = predicted.translation() - previous.translation();
+            self.calibration.propagate_pose_scale(&c, &step_world, false, &mut cov);
         }
         self.process(predicted, cov, Prediction::ConstantVelocity, None, lines)
     }
@@ -368,12 +365,12 @@ impl Aiding {
         let (predicted, mut cov) = predict(&previous, &self.covariance, &increment, &noise);
         self.pending_step = Some((increment, noise.covariance(&increment)));
         // The calibration's own uncertainty over the step.
-        self.step_world = Vector2::new(predicted.x() - previous.x(), predicted.y() - previous.y());
+        let step_world = predicted.translation() - previous.translation();
         cov[(2, 2)] += var_heading;
         self.calibration_var_heading = var_heading;
-        let len = self.step_world.norm();
+        let len = step_world.norm();
         if len > 0.0 {
-            let u = self.step_world / len;
+            let u = step_world / len;
             let mut t = cov.fixed_view_mut::<2, 2>(0, 0);
             t += u * u.transpose() * var_along;
         }
@@ -381,7 +378,7 @@ impl Aiding {
             return self.fall_back(Fallback::NonFiniteSource);
         }
         if let Some(c) = e.calibration {
-            self.calibration.propagate_pose_scale(&c, &self.step_world, !jumped, &mut cov);
+            self.calibration.propagate_pose_scale(&c, &step_world, !jumped, &mut cov);
         }
         self.process(predicted, cov, prediction, fallback, lines)
     }
