@@ -68,8 +68,11 @@ pub struct MapArgs {
     /// `X_M,Y_M,YAW_DEG` (forward, left, counter-clockwise). The trajectory
     /// is written for the vehicle; the map, the scans and Foxglove's poses
     /// are placed with the sensor's. Default: the configuration's
-    /// `[vehicle_from_sensor]`, which the presets leave at the identity (the
-    /// log's poses are the sensor's).
+    /// `[vehicle_from_sensor]` when it is not the identity; else, for a log
+    /// that stores both the laser's pose and the odometry pose with each
+    /// scan (CARMEN), the offset between them when it is the same on the
+    /// first 200 scans (said on stderr); else the identity (the log's poses
+    /// are the sensor's).
     #[arg(long, value_name = "X_M,Y_M,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
     mount: Option<Pose2>,
     /// Output folder.
@@ -108,6 +111,33 @@ struct PoseOut {
     matches: usize,
 }
 
+/// Scans read to find a log's mount.
+const MOUNT_SCANS: usize = 200;
+
+/// The LIDAR's mount that the first [`MOUNT_SCANS`] scans of a log imply
+/// when each stores both the laser's pose and the vehicle's odometry pose
+/// (CARMEN), by [`pcaline_io::mount_from_pose_pairs`]; `None` for a log
+/// without both poses, whose two poses are one or drift apart, or that
+/// cannot be read (the mapping pass then reports the error).
+fn mount_of_log(log: &std::path::Path, options: &pcaline_io::LogOptions) -> Option<Pose2> {
+    // Only CARMEN records carry both poses: other logs are not read twice.
+    let format = options.format.map_or_else(|| pcaline_io::LogFormat::detect(log), Ok).ok()?;
+    if format != pcaline_io::LogFormat::Carmen {
+        return None;
+    }
+    let mut pairs = Vec::new();
+    let read = pcaline_io::read_log(log, options, |record| {
+        if let pcaline_io::LogRecord::Scan(s) = record {
+            let (Some(vehicle), Some(sensor)) = (s.odometry, s.pose) else {
+                return ControlFlow::Break(());
+            };
+            pairs.push((vehicle, sensor));
+        }
+        if pairs.len() >= MOUNT_SCANS { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    });
+    read.ok().and_then(|_| pcaline_io::mount_from_pose_pairs(&pairs))
+}
+
 /// Runs `pcaline map`.
 pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     if !args.log.exists() {
@@ -131,7 +161,27 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
     let sensor = args.input.sensor(&args.log, config.sensor)?;
-    let mount = args.mount.unwrap_or(config.vehicle_from_sensor);
+    let mount = match args.mount {
+        Some(m) => m,
+        None if config.vehicle_from_sensor != Pose2::identity() => config.vehicle_from_sensor,
+        None => match mount_of_log(&args.log, &args.input.options()?) {
+            Some(m) => {
+                if !quiet {
+                    eprintln!(
+                        "{}: each scan's laser pose lies {:.3} m forward, {:.3} m left and \
+                         {:.2}° turned from its odometry pose: taken as the LIDAR's mount \
+                         (--mount overrides)",
+                        args.log.display(),
+                        m.x(),
+                        m.y(),
+                        m.heading().to_degrees()
+                    );
+                }
+                m
+            }
+            None => Pose2::identity(),
+        },
+    };
     let mut mapper = Mapper::new(
         MapperConfig::new(config.detector_for(sensor), config.map, aiding_config)
             .with_loop_closure((!args.no_loop_closure).then_some(config.loop_closure))

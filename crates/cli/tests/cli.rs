@@ -251,6 +251,61 @@ fn map_with_a_sensor_mount_writes_the_vehicles_trajectory() {
 }
 
 #[test]
+fn map_takes_the_lidar_mount_from_a_carmen_log_that_stores_it() {
+    // Intel's log stores the laser's pose twice (no offset). Rewritten as a
+    // robot whose laser sits 30 cm ahead and 5 cm left, with the odometry
+    // triple the robot's pose, `map` must find the mount by itself and
+    // place every scan where the laser poses put it. Without the mount
+    // (`--mount 0,0,0`), the scans sit 0.89 m rms from there (measured), the
+    // map 2.6x less sharp.
+    let Some(path) = data("intel/intel.gfs.log") else { return };
+    let mount = pcaline::Pose2::new(0.3, 0.05, 0.0);
+    let vehicle_from_laser = mount.inverse();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut offset = String::new();
+    for line in text.lines() {
+        let mut f: Vec<String> = line.split_whitespace().map(str::to_owned).collect();
+        if f.first().is_some_and(|w| w == "FLASER") {
+            let n: usize = f[1].parse().unwrap();
+            let v: Vec<f64> = f[2 + n..5 + n].iter().map(|x| x.parse().unwrap()).collect();
+            let robot = pcaline::Pose2::new(v[0], v[1], v[2]).compose(&vehicle_from_laser);
+            for (k, x) in [robot.x(), robot.y(), robot.heading()].into_iter().enumerate() {
+                f[5 + n + k] = format!("{x:.6}");
+            }
+        }
+        offset.push_str(&f.join(" "));
+        offset.push('\n');
+    }
+    let log = tmp("intel-offset.log");
+    std::fs::write(&log, offset).unwrap();
+    let (plain, found) = (tmp("mount-intel"), tmp("mount-intel-offset"));
+    let out = pcaline(&["map", s(&path), "--out", s(&plain)]);
+    assert!(out.status.success());
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("mount"));
+    let out = pcaline(&["map", s(&log), "--out", s(&found)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("0.300 m forward, 0.050 m left") && err.contains("mount"), "{err}");
+    let poses = |dir: &Path| -> Vec<pcaline::Pose2> {
+        let text = std::fs::read(dir.join("trajectory.json")).unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&text).unwrap();
+        let p = |p: &serde_json::Value, k: usize| p["aided"][k].as_f64().unwrap();
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|e| pcaline::Pose2::new(p(e, 0), p(e, 1), p(e, 2)))
+            .collect()
+    };
+    let (laser, robot) = (poses(&plain), poses(&found));
+    assert_eq!(laser.len(), robot.len());
+    for (l, r) in laser.iter().zip(&robot) {
+        // Measured: within 3 µm (the rewritten log's six decimals).
+        let d = l.between(&r.compose(&mount));
+        assert!(d.x().hypot(d.y()) < 1e-3, "{l:?} {r:?}");
+    }
+}
+
+#[test]
 fn reproduce_small() {
     let out = pcaline(&["--quiet", "reproduce", "table2", "--runs", "200", "--json"]);
     assert!(out.status.success());

@@ -19,6 +19,7 @@ mod laserscan_codec;
 mod lines_file;
 mod log;
 mod log_chunks;
+mod mount;
 mod record;
 mod relations;
 mod ros;
@@ -40,6 +41,10 @@ pub use lines_file::{
 };
 pub use log::{LogFormat, LogOptions, MAX_COORDINATE_M, check_record, check_scan_header, read_log};
 pub use log_chunks::{LogChunk, read_log_chunks};
+pub use mount::{
+    MOUNT_AGREEMENT_M, MOUNT_AGREEMENT_RAD, MOUNT_MAX_M, MOUNT_MIN_PAIRS, MOUNT_TRIVIAL_M,
+    MOUNT_TRIVIAL_RAD, mount_from_pose_pairs,
+};
 pub use pcaline_geometry::Relation;
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
 pub use relations::{ScanPair, read_relations, read_scan_pairs};
