@@ -1,6 +1,7 @@
 //! Every reader fed random bytes and truncated real files: an error or a
 //! result, never a panic, and the same records and error read whole
-//! (`read_log`) or in chunks parsed apart (`read_log_chunks`). Seeded.
+//! (`read_log`) or in chunks parsed apart (`read_log_chunks`); the ROS
+//! odometry reader too (`read_ros_odometry`). Seeded.
 
 #![allow(clippy::print_stderr)] // the loud report of a missing dataset
 
@@ -45,6 +46,11 @@ fn read_all(path: &Path, format: Option<LogFormat>) {
         chunks_error = read.err().map(|e| e.to_string());
     }
     assert_eq!((in_chunks, chunks_error), (whole, whole_error), "{}", path.display());
+    // The odometry pass of `pcaline map` over the same file: a result or an
+    // error, never a panic.
+    if let Some(f) = format.or_else(|| LogFormat::detect(path).ok()) {
+        let _ = pcaline_io::read_ros_odometry(path, f);
+    }
 }
 
 const FORMATS: [(&str, LogFormat); 6] = [

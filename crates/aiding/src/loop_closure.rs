@@ -546,7 +546,7 @@ impl LoopClosing {
                 let first = self.keyframes[k].scan;
                 let w = (scan - first) as f64 / (next_keyframe.scan - first).max(1) as f64;
                 let from_next = next_node.compose(&k_from_next.inverse().compose(&rel));
-                Some(blend(&from_keyframe, &from_next, w))
+                Some(from_keyframe.lerp(&from_next, w))
             })
             .collect()
     }
@@ -1037,16 +1037,6 @@ fn loop_covariance(
         Some(c) if c.iter().all(|v| v.is_finite()) => c + floors,
         _ => floors * 100.0,
     }
-}
-
-/// The pose a fraction `w` of the way from `a` to `b`: positions blended
-/// linearly, headings along the shorter arc. `w` 0 gives `a`, 1 gives `b`.
-fn blend(a: &Pose2, b: &Pose2, w: f64) -> Pose2 {
-    Pose2::new(
-        a.x() + w * (b.x() - a.x()),
-        a.y() + w * (b.y() - a.y()),
-        wrap_angle(a.heading() + w * wrap_angle(b.heading() - a.heading())),
-    )
 }
 
 #[cfg(test)]

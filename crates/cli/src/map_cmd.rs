@@ -75,6 +75,13 @@ pub struct MapArgs {
     /// are the sensor's).
     #[arg(long, value_name = "X_M,Y_M,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
     mount: Option<Pose2>,
+    /// The `nav_msgs/Odometry` topic to use as the source (ROS 1, ROS 2 and
+    /// MCAP logs). Default: the log's only Odometry topic; with several,
+    /// none is guessed (LIDAR-only mode, and stderr lists them). Each scan
+    /// takes the pose interpolated at its stamp from the messages either
+    /// side, within 1 s.
+    #[arg(long, value_name = "TOPIC")]
+    odom_topic: Option<String>,
     /// Output folder.
     #[arg(long, default_value = "out/map")]
     out: PathBuf,
@@ -138,6 +145,70 @@ fn mount_of_log(log: &std::path::Path, options: &pcaline_io::LogOptions) -> Opti
     read.ok().and_then(|_| pcaline_io::mount_from_pose_pairs(&pairs))
 }
 
+/// The odometry of a ROS log, as `map` takes it.
+enum RosOdometry {
+    /// No `nav_msgs/Odometry` (or not a ROS log).
+    None,
+    /// The topic used and its poses, sorted by stamp.
+    Track { topic: String, poses: Vec<pcaline_io::OdometryRecord> },
+    /// Several topics and none chosen.
+    Several(Vec<String>),
+}
+
+/// The `nav_msgs/Odometry` of a ROS 1, ROS 2 or MCAP log: the topic
+/// `chosen`, else the only one. A chosen topic the log does not have is an
+/// error listing those it has.
+fn ros_odometry(
+    log: &std::path::Path,
+    options: &pcaline_io::LogOptions,
+    chosen: Option<&str>,
+) -> Result<RosOdometry> {
+    let format = match options.format {
+        Some(f) => f,
+        None => pcaline_io::LogFormat::detect(log)?,
+    };
+    let mut tracks = pcaline_io::read_ros_odometry(log, format)?;
+    let topic = match chosen {
+        Some(t) if tracks.contains_key(t) => t.to_string(),
+        Some(t) => {
+            let have: Vec<&str> = tracks.keys().map(String::as_str).collect();
+            return Err(BadInput(format!(
+                "--odom-topic {t}: {} has no nav_msgs/Odometry on it (Odometry topics: {})",
+                log.display(),
+                if have.is_empty() { "none".to_string() } else { have.join(", ") }
+            ))
+            .into());
+        }
+        None if tracks.len() == 1 => tracks.keys().next().cloned().unwrap_or_default(),
+        None if tracks.is_empty() => return Ok(RosOdometry::None),
+        None => return Ok(RosOdometry::Several(tracks.into_keys().collect())),
+    };
+    let mut poses = tracks.remove(&topic).unwrap_or_default();
+    poses.sort_by(|a, b| a.stamp_s.total_cmp(&b.stamp_s));
+    Ok(RosOdometry::Track { topic, poses })
+}
+
+/// Odometry messages farther apart than this do not bracket a scan, seconds.
+const MAX_ODOMETRY_GAP_S: f64 = 1.0;
+
+/// The odometry pose at `stamp_s`, interpolated between the messages either
+/// side (`poses` sorted by stamp); `None` before the first, after the last,
+/// or in a gap over [`MAX_ODOMETRY_GAP_S`]. A message at the stamp itself
+/// is taken as it is.
+fn odometry_at(poses: &[pcaline_io::OdometryRecord], stamp_s: f64) -> Option<Pose2> {
+    let after = poses.partition_point(|o| o.stamp_s < stamp_s);
+    let next = poses.get(after)?;
+    if next.stamp_s == stamp_s {
+        return Some(next.pose);
+    }
+    let before = poses.get(after.checked_sub(1)?)?;
+    let gap = next.stamp_s - before.stamp_s;
+    if !(gap > 0.0 && gap <= MAX_ODOMETRY_GAP_S) {
+        return None;
+    }
+    Some(before.pose.lerp(&next.pose, (stamp_s - before.stamp_s) / gap))
+}
+
 /// Runs `pcaline map`.
 pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     if !args.log.exists() {
@@ -187,6 +258,24 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             .with_loop_closure((!args.no_loop_closure).then_some(config.loop_closure))
             .with_mount(mount),
     )?;
+    let odometry = ros_odometry(&args.log, &args.input.options()?, args.odom_topic.as_deref())?;
+    if !quiet {
+        match &odometry {
+            RosOdometry::Track { topic, poses } => eprintln!(
+                "{}: odometry from {topic} ({} messages) as the source, the LIDAR at its child \
+                 frame unless --mount says where",
+                args.log.display(),
+                poses.len()
+            ),
+            RosOdometry::Several(topics) => eprintln!(
+                "{}: several nav_msgs/Odometry topics ({}): give one with --odom-topic; none \
+                 is used",
+                args.log.display(),
+                topics.join(", ")
+            ),
+            RosOdometry::None => {}
+        }
+    }
     let bar = progress::spinner("scans", quiet);
     let mut poses: Vec<PoseOut> = Vec::new();
     let mut without_odometry = 0;
@@ -201,7 +290,10 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         // Deskewed with the velocity of the last step (the source's, or the
         // estimator's without one), when the scan has its beam timing (ROS
         // time_increment).
-        let source = s.odometry.or(s.pose);
+        let source = s.odometry.or(s.pose).or_else(|| match &odometry {
+            RosOdometry::Track { poses, .. } => odometry_at(poses, s.scan.stamp_s?),
+            _ => None,
+        });
         let step = match source {
             Some(p) => mapper.process(&s.scan, &p),
             None => {
@@ -527,4 +619,32 @@ fn draw(
         plot.legend("loop closure (grey: switched off)", "#2ca02c", Mark::Line(2.0));
     }
     plot.finish(&format!("{name}: line map and trajectory"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pcaline_io::OdometryRecord;
+
+    #[test]
+    fn odometry_is_interpolated_between_the_messages_either_side() {
+        let at = |t: f64, x: f64, h: f64| OdometryRecord {
+            pose: Pose2::new(x, 0.0, h),
+            stamp_s: t,
+            position: 0,
+        };
+        let poses = [at(1.0, 0.0, 3.0), at(1.5, 1.0, -3.0), at(3.0, 2.0, 0.0)];
+        let p = odometry_at(&poses, 1.25).unwrap();
+        assert!((p.x() - 0.5).abs() < 1e-12);
+        // 3 rad to -3 rad the short way: through pi.
+        assert!((p.heading().abs() - std::f64::consts::PI).abs() < 1e-9, "{p:?}");
+        assert_eq!(odometry_at(&poses, 1.5).unwrap(), poses[1].pose);
+        assert_eq!(odometry_at(&poses, 1.0).unwrap(), poses[0].pose);
+        // Before the first, after the last, across a 1.5 s gap: none.
+        assert!(odometry_at(&poses, 0.9).is_none());
+        assert!(odometry_at(&poses, 3.1).is_none());
+        assert!(odometry_at(&poses, 2.0).is_none());
+        assert!(odometry_at(&[], 1.0).is_none());
+        assert!(odometry_at(&poses, f64::NAN).is_none());
+    }
 }

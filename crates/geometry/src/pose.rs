@@ -137,6 +137,27 @@ impl Pose2 {
     pub fn between(&self, other: &Pose2) -> Pose2 {
         self.inverse().compose(other)
     }
+
+    /// The pose a fraction `w` of the way from `self` to `other`: positions
+    /// blended linearly, the heading along the shorter arc (wrapped to
+    /// (-pi, pi]). `w` 0 gives `self`'s position and heading, 1 `other`'s;
+    /// `w` outside [0, 1] extrapolates.
+    ///
+    /// ```
+    /// use pcaline_geometry::Pose2;
+    /// let (a, b) = (Pose2::new(0.0, 0.0, 3.0), Pose2::new(2.0, 4.0, -3.0));
+    /// let m = a.lerp(&b, 0.5);
+    /// assert_eq!((m.x(), m.y()), (1.0, 2.0));
+    /// // 3 rad to -3 rad the short way, through pi.
+    /// assert!((m.heading().abs() - std::f64::consts::PI).abs() < 1e-9);
+    /// ```
+    pub fn lerp(&self, other: &Pose2, w: f64) -> Pose2 {
+        Pose2::new(
+            self.x + w * (other.x - self.x),
+            self.y + w * (other.y - self.y),
+            crate::wrap_angle(self.heading + w * crate::wrap_angle(other.heading - self.heading)),
+        )
+    }
 }
 
 #[cfg(test)]

@@ -10,64 +10,8 @@
 //! `int32 sec, uint32 nanosec`. ROS 1 is packed little-endian with a
 //! `uint32 seq` first.
 
+use crate::ros_cursor::Cursor;
 use pcaline_geometry::Scan;
-
-/// A bounds-checked reader of primitive values.
-struct Cursor<'a> {
-    data: &'a [u8],
-    pos: usize,
-    base: usize,
-    little: bool,
-    align: bool,
-}
-
-impl<'a> Cursor<'a> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
-        if self.align && n > 1 {
-            let off = (self.pos - self.base) % n;
-            if off != 0 {
-                self.pos += n - off;
-            }
-        }
-        let end = self.pos.checked_add(n).filter(|e| *e <= self.data.len());
-        let Some(end) = end else {
-            return Err(format!("truncated at byte {} reading {what}", self.pos));
-        };
-        let s = &self.data[self.pos..end];
-        self.pos = end;
-        Ok(s)
-    }
-
-    fn u32(&mut self, what: &str) -> Result<u32, String> {
-        let b: [u8; 4] = self.take(4, what)?.try_into().map_err(|_| what.to_string())?;
-        Ok(if self.little { u32::from_le_bytes(b) } else { u32::from_be_bytes(b) })
-    }
-
-    fn f32(&mut self, what: &str) -> Result<f32, String> {
-        Ok(f32::from_bits(self.u32(what)?))
-    }
-
-    fn string(&mut self, what: &str) -> Result<String, String> {
-        let len = self.u32(what)? as usize;
-        let bytes = self.take_bytes(len, what)?;
-        Ok(String::from_utf8_lossy(bytes).trim_end_matches('\0').to_string())
-    }
-
-    fn take_bytes(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
-        let align = std::mem::replace(&mut self.align, false);
-        let r = self.take(n, what);
-        self.align = align;
-        r
-    }
-
-    fn f32_seq(&mut self, what: &str) -> Result<Vec<f32>, String> {
-        let n = self.u32(what)? as usize;
-        if n.saturating_mul(4) > self.data.len().saturating_sub(self.pos) + 4 {
-            return Err(format!("{what}: {n} values do not fit in the message"));
-        }
-        (0..n).map(|_| self.f32(what)).collect()
-    }
-}
 
 /// The fields after the header, shared by both layouts.
 fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
@@ -94,15 +38,7 @@ fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
 /// Decodes a ROS 2 `sensor_msgs/msg/LaserScan` in CDR (with its
 /// encapsulation header). Errors say what was being read where.
 pub fn decode_laserscan_cdr(data: &[u8]) -> Result<Scan, String> {
-    if data.len() < 4 {
-        return Err("shorter than the CDR encapsulation header".into());
-    }
-    let little = match data[1] {
-        0 | 2 => false,
-        1 | 3 => true,
-        k => return Err(format!("unknown CDR encapsulation kind {k}")),
-    };
-    let mut c = Cursor { data, pos: 4, base: 4, little, align: true };
+    let mut c = Cursor::cdr(data)?;
     let sec = c.u32("header.stamp.sec")? as i32;
     let nanosec = c.u32("header.stamp.nanosec")?;
     let _frame = c.string("header.frame_id")?;
@@ -111,7 +47,7 @@ pub fn decode_laserscan_cdr(data: &[u8]) -> Result<Scan, String> {
 
 /// Decodes a ROS 1 `sensor_msgs/LaserScan`.
 pub fn decode_laserscan_ros1(data: &[u8]) -> Result<Scan, String> {
-    let mut c = Cursor { data, pos: 0, base: 0, little: true, align: false };
+    let mut c = Cursor::ros1(data);
     let _seq = c.u32("header.seq")?;
     let sec = c.u32("header.stamp.secs")?;
     let nsec = c.u32("header.stamp.nsecs")?;

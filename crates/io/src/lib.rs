@@ -20,9 +20,11 @@ mod lines_file;
 mod log;
 mod log_chunks;
 mod mount;
+mod odometry_codec;
 mod record;
 mod relations;
 mod ros;
+mod ros_cursor;
 mod scan_text;
 mod scene_file;
 
@@ -45,9 +47,10 @@ pub use mount::{
     MOUNT_AGREEMENT_M, MOUNT_AGREEMENT_RAD, MOUNT_MAX_M, MOUNT_MIN_PAIRS, MOUNT_TRIVIAL_M,
     MOUNT_TRIVIAL_RAD, mount_from_pose_pairs,
 };
+pub use odometry_codec::{decode_odometry_cdr, decode_odometry_ros1, encode_odometry_cdr};
 pub use pcaline_geometry::Relation;
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
 pub use relations::{ScanPair, read_relations, read_scan_pairs};
-pub use ros::{read_mcap, read_ros1_bag, read_ros2_bag};
+pub use ros::{read_mcap, read_ros_odometry, read_ros1_bag, read_ros2_bag};
 pub use scan_text::{ScanJson, read_scan_csv, read_scan_json, scans_to_csv};
 pub use scene_file::{parse_scene, read_scene, write_scene};

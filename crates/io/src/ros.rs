@@ -1,15 +1,40 @@
 //! ROS logs: ROS 1 bags (format 2.0, via `rosbag`), ROS 2 bags (sqlite3
 //! `.db3`, via `rusqlite` with the bundled SQLite), and MCAP (via `mcap`),
-//! yielding every `sensor_msgs/LaserScan` (optionally of one topic).
+//! yielding every `sensor_msgs/LaserScan` (optionally of one topic); and
+//! their `nav_msgs/Odometry`, topic by topic ([`read_ros_odometry`]).
 
 use crate::laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1};
-use crate::{IoError, LogRecord, ScanRecord};
-use std::collections::{BTreeSet, HashMap};
+use crate::odometry_codec::{decode_odometry_cdr, decode_odometry_ros1};
+use crate::{IoError, LogFormat, LogRecord, OdometryRecord, ScanRecord};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::ops::ControlFlow;
 use std::path::Path;
 
 const ROS1_TYPE: &str = "sensor_msgs/LaserScan";
 const ROS2_TYPE: &str = "sensor_msgs/msg/LaserScan";
+const ROS1_ODOMETRY: &str = "nav_msgs/Odometry";
+const ROS2_ODOMETRY: &str = "nav_msgs/msg/Odometry";
+
+/// The messages a pass over a ROS log takes: one type (its ROS 1 and ROS 2
+/// names), optionally of one topic.
+#[derive(Clone, Copy)]
+struct Wanted<'a> {
+    ros1_type: &'a str,
+    ros2_type: &'a str,
+    topic: Option<&'a str>,
+}
+
+/// Called with each wanted message's file (a ROS 2 bag directory's `.db3`
+/// file, else the log), topic, position (a 1-based message number, or a
+/// ROS 2 message id) and data, in the file's order.
+type Visit<'v> = dyn FnMut(&Path, &str, usize, &[u8]) -> Result<ControlFlow<()>, IoError> + 'v;
+
+/// What a pass saw: the topics of the wanted type, and whether the visitor
+/// stopped it.
+struct Pass {
+    topics: BTreeSet<String>,
+    stopped: bool,
+}
 
 fn scan_record(scan: pcaline_geometry::Scan, position: usize) -> LogRecord {
     LogRecord::Scan(ScanRecord { scan, pose: None, odometry: None, position, sensor: None })
@@ -26,8 +51,44 @@ pub fn read_ros1_bag(
     topic: Option<&str>,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
+    read_scans(path, topic, visit, ros1_messages, decode_laserscan_ros1, "message")
+}
+
+/// A pass over the messages of one type of a ROS log.
+type MessagePass = fn(&Path, Wanted<'_>, &mut Visit<'_>) -> Result<Pass, IoError>;
+
+/// The LaserScans of a pass (`messages`), decoded by `decode`, each decode
+/// error naming its `label` (message number or id). Returns the scans
+/// read; a `topic` asked for that no LaserScan channel has is an error,
+/// unless `visit` stopped the pass early.
+fn read_scans(
+    path: &Path,
+    topic: Option<&str>,
+    visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
+    messages: MessagePass,
+    decode: fn(&[u8]) -> Result<pcaline_geometry::Scan, String>,
+    label: &str,
+) -> Result<usize, IoError> {
+    let wanted = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic };
+    let mut count = 0;
+    let pass = messages(path, wanted, &mut |file, _, position, data| {
+        let scan = decode(data).map_err(|e| {
+            IoError::parse(file, None, format!("{label} {position}: LaserScan: {e}"))
+        })?;
+        count += 1;
+        Ok(visit(scan_record(scan, position)))
+    })?;
+    if !pass.stopped {
+        topic_exists(path, topic, &pass.topics)?;
+    }
+    Ok(count)
+}
+
+/// The wanted messages of a ROS 1 bag, in chunk order (see
+/// [`read_ros1_bag`] for the checks).
+fn ros1_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Result<Pass, IoError> {
     check_ros1_header(path)?;
-    let run = std::panic::AssertUnwindSafe(|| read_ros1_checked(path, topic, visit));
+    let run = std::panic::AssertUnwindSafe(|| read_ros1_checked(path, wanted, visit));
     std::panic::catch_unwind(run).unwrap_or_else(|_| {
         Err(IoError::parse(path, None, "corrupt ROS 1 bag (the bag decoder failed on it)"))
     })
@@ -70,9 +131,9 @@ fn check_ros1_header(path: &Path) -> Result<(), IoError> {
 
 fn read_ros1_checked(
     path: &Path,
-    topic: Option<&str>,
-    visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
-) -> Result<usize, IoError> {
+    wanted: Wanted<'_>,
+    visit: &mut Visit<'_>,
+) -> Result<Pass, IoError> {
     let bag = rosbag::RosBag::new(path).map_err(|e| IoError::io(path, e))?;
     let bad = |msg: String| IoError::parse(path, None, msg);
     // Chunks are read at the positions the index gives (as the ROS tools
@@ -89,9 +150,10 @@ fn read_ros1_checked(
         return Err(bad("no chunk in the index (an unindexed or truncated bag)".into()));
     }
     positions.sort_unstable();
-    let mut connections: HashMap<u32, bool> = HashMap::new();
-    let mut scan_topics = BTreeSet::new();
-    let (mut index, mut count) = (0usize, 0usize);
+    // Each connection's topic, when it is of the wanted type and topic.
+    let mut connections: HashMap<u32, Option<String>> = HashMap::new();
+    let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
+    let mut index = 0usize;
     for (k, pos) in positions.iter().enumerate() {
         let mut records = bag.chunk_records();
         records.seek(*pos).map_err(|e| bad(format!("chunk {} at byte {pos}: {e}", k + 1)))?;
@@ -104,29 +166,25 @@ fn read_ros1_checked(
             let msg = msg.map_err(|e| bad(format!("after message {index}: {e}")))?;
             match msg {
                 rosbag::MessageRecord::Connection(c) => {
-                    if c.tp == ROS1_TYPE {
-                        scan_topics.insert(c.topic.to_string());
+                    let of_type = c.tp == wanted.ros1_type;
+                    if of_type {
+                        pass.topics.insert(c.topic.to_string());
                     }
-                    let wanted = c.tp == ROS1_TYPE && topic.is_none_or(|t| t == c.topic);
-                    connections.insert(c.id, wanted);
+                    let taken = of_type && wanted.topic.is_none_or(|t| t == c.topic);
+                    connections.insert(c.id, taken.then(|| c.topic.to_string()));
                 }
                 rosbag::MessageRecord::MessageData(m) => {
                     index += 1;
-                    if connections.get(&m.conn_id) != Some(&true) {
-                        continue;
-                    }
-                    let scan = decode_laserscan_ros1(m.data)
-                        .map_err(|e| bad(format!("message {index}: LaserScan: {e}")))?;
-                    count += 1;
-                    if visit(scan_record(scan, index)).is_break() {
-                        return Ok(count);
+                    let Some(Some(topic)) = connections.get(&m.conn_id) else { continue };
+                    if visit(path, topic, index, m.data)?.is_break() {
+                        pass.stopped = true;
+                        return Ok(pass);
                     }
                 }
             }
         }
     }
-    topic_exists(path, topic, &scan_topics)?;
-    Ok(count)
+    Ok(pass)
 }
 
 /// A `topic` asked for that no LaserScan channel has is an error listing
@@ -179,8 +237,12 @@ pub fn read_ros2_bag(
     topic: Option<&str>,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
-    let mut count = 0;
-    let mut scan_topics = BTreeSet::new();
+    read_scans(path, topic, visit, ros2_messages, decode_laserscan_cdr, "message id")
+}
+
+/// The wanted messages of a ROS 2 bag, file by file in message id order.
+fn ros2_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Result<Pass, IoError> {
+    let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
     for file in ros2_files(path)? {
         let sql = |e: rusqlite::Error| IoError::parse(&file, None, format!("sqlite: {e}"));
         let db = rusqlite::Connection::open_with_flags(
@@ -189,54 +251,50 @@ pub fn read_ros2_bag(
         )
         .map_err(sql)?;
         let mut topics = db.prepare("SELECT id, name, type FROM topics").map_err(sql)?;
-        let scans: Vec<(i64, String)> = topics
+        let of_type: Vec<(i64, String)> = topics
             .query_map([], |r| {
                 Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?, r.get::<_, String>(2)?))
             })
             .map_err(sql)?
             .filter_map(Result::ok)
-            .filter(|(_, _, ty)| ty == ROS2_TYPE)
+            .filter(|(_, _, ty)| ty == wanted.ros2_type)
             .map(|(id, name, _)| (id, name))
             .collect();
-        scan_topics.extend(scans.iter().map(|(_, name)| name.clone()));
-        let wanted: Vec<i64> = scans
-            .iter()
-            .filter(|(_, name)| topic.is_none_or(|t| t == name))
-            .map(|(id, _)| *id)
+        pass.topics.extend(of_type.iter().map(|(_, name)| name.clone()));
+        let taken: HashMap<i64, String> = of_type
+            .into_iter()
+            .filter(|(_, name)| wanted.topic.is_none_or(|t| t == name))
             .collect();
-        if wanted.is_empty() {
+        if taken.is_empty() {
             continue;
         }
-        let list = wanted.iter().map(i64::to_string).collect::<Vec<_>>().join(",");
+        let list = taken.keys().map(i64::to_string).collect::<Vec<_>>().join(",");
         let mut page = db
             .prepare(&format!(
-                "SELECT id, data FROM messages WHERE topic_id IN ({list}) AND id > ?1 ORDER BY id LIMIT 512"
+                "SELECT id, topic_id, data FROM messages WHERE topic_id IN ({list}) AND id > ?1 ORDER BY id LIMIT 512"
             ))
             .map_err(sql)?;
         let mut last = i64::MIN;
         loop {
-            let rows: Vec<(i64, Vec<u8>)> = page
-                .query_map([last], |r| Ok((r.get(0)?, r.get(1)?)))
+            let rows: Vec<(i64, i64, Vec<u8>)> = page
+                .query_map([last], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))
                 .map_err(sql)?
                 .collect::<Result<_, _>>()
                 .map_err(sql)?;
             if rows.is_empty() {
                 break;
             }
-            for (id, data) in rows {
+            for (id, topic_id, data) in rows {
                 last = id;
-                let scan = decode_laserscan_cdr(&data).map_err(|e| {
-                    IoError::parse(&file, None, format!("message id {id}: LaserScan: {e}"))
-                })?;
-                count += 1;
-                if visit(scan_record(scan, id as usize)).is_break() {
-                    return Ok(count);
+                let topic = taken.get(&topic_id).map_or("", String::as_str);
+                if visit(&file, topic, id as usize, &data)?.is_break() {
+                    pass.stopped = true;
+                    return Ok(pass);
                 }
             }
         }
     }
-    topic_exists(path, topic, &scan_topics)?;
-    Ok(count)
+    Ok(pass)
 }
 
 /// Streams the CDR LaserScans of an MCAP file.
@@ -245,6 +303,11 @@ pub fn read_mcap(
     topic: Option<&str>,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
+    read_scans(path, topic, visit, mcap_messages, decode_laserscan_cdr, "message")
+}
+
+/// The wanted CDR messages of an MCAP file, in the file's order.
+fn mcap_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Result<Pass, IoError> {
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
     // No record is longer than the file: a corrupt length must not become an
     // allocation of exabytes.
@@ -252,30 +315,62 @@ pub fn read_mcap(
     let options = mcap::sans_io::LinearReaderOptions::default()
         .with_record_length_limit(usize::try_from(len).unwrap_or(usize::MAX));
     let reader = mcap::io::MessageReader::new_with_options(std::io::BufReader::new(file), options);
-    let mut count = 0;
-    let mut scan_topics = BTreeSet::new();
+    let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
     for (index, message) in reader.enumerate() {
         let message = message
             .map_err(|e| IoError::parse(path, None, format!("after message {index}: {e}")))?;
         let ch = &message.channel;
-        let is_scan =
-            ch.schema.as_ref().is_some_and(|s| s.name == ROS2_TYPE) && ch.message_encoding == "cdr";
-        if is_scan && !scan_topics.contains(&ch.topic) {
-            scan_topics.insert(ch.topic.clone());
+        let of_type = ch.schema.as_ref().is_some_and(|s| s.name == wanted.ros2_type)
+            && ch.message_encoding == "cdr";
+        if of_type && !pass.topics.contains(&ch.topic) {
+            pass.topics.insert(ch.topic.clone());
         }
-        if !is_scan || topic.is_some_and(|t| t != ch.topic) {
+        if !of_type || wanted.topic.is_some_and(|t| t != ch.topic) {
             continue;
         }
-        let scan = decode_laserscan_cdr(&message.data).map_err(|e| {
-            IoError::parse(path, None, format!("message {}: LaserScan: {e}", index + 1))
-        })?;
-        count += 1;
-        if visit(scan_record(scan, index + 1)).is_break() {
-            return Ok(count);
+        if visit(path, &ch.topic, index + 1, &message.data)?.is_break() {
+            pass.stopped = true;
+            return Ok(pass);
         }
     }
-    topic_exists(path, topic, &scan_topics)?;
-    Ok(count)
+    Ok(pass)
+}
+
+/// The `nav_msgs/Odometry` of a ROS log (ROS 1 bag, ROS 2 bag or MCAP), by
+/// topic, each topic's records in the file's order (positions as the scan
+/// readers give them). A format without such messages, or a log without
+/// any, gives an empty map. Errors name the file and the message; a pose
+/// that is not finite or beyond [`crate::MAX_COORDINATE_M`] is an error, as
+/// in every reader.
+pub fn read_ros_odometry(
+    path: &Path,
+    format: LogFormat,
+) -> Result<BTreeMap<String, Vec<OdometryRecord>>, IoError> {
+    let wanted = Wanted { ros1_type: ROS1_ODOMETRY, ros2_type: ROS2_ODOMETRY, topic: None };
+    let mut tracks: BTreeMap<String, Vec<OdometryRecord>> = BTreeMap::new();
+    type Decoded = Result<(f64, pcaline_geometry::Pose2), String>;
+    let mut take = |file: &Path, topic: &str, position: usize, decoded: Decoded| {
+        let what =
+            |e: String| IoError::parse(file, None, format!("message {position}: Odometry: {e}"));
+        let (stamp_s, pose) = decoded.map_err(what)?;
+        let record = OdometryRecord { pose, stamp_s, position };
+        crate::check_record(&LogRecord::Odometry(record)).map_err(what)?;
+        tracks.entry(topic.to_string()).or_default().push(record);
+        Ok(ControlFlow::Continue(()))
+    };
+    match format {
+        LogFormat::Ros1Bag => {
+            ros1_messages(path, wanted, &mut |f, t, i, d| take(f, t, i, decode_odometry_ros1(d)))?
+        }
+        LogFormat::Ros2Bag => {
+            ros2_messages(path, wanted, &mut |f, t, i, d| take(f, t, i, decode_odometry_cdr(d)))?
+        }
+        LogFormat::Mcap => {
+            mcap_messages(path, wanted, &mut |f, t, i, d| take(f, t, i, decode_odometry_cdr(d)))?
+        }
+        _ => return Ok(tracks),
+    };
+    Ok(tracks)
 }
 
 #[cfg(test)]
@@ -284,6 +379,116 @@ mod tests {
     use crate::encode_laserscan_cdr;
     use pcaline_geometry::Scan;
     use std::collections::BTreeMap;
+
+    /// Odometry of two topics beside the scans, in an MCAP file and a ROS 2
+    /// bag: each topic's poses come back in order, the scans as before.
+    #[test]
+    fn odometry_is_read_topic_by_topic() {
+        let dir = std::env::temp_dir().join(format!("pcaline-odom-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let pose = |k: usize| pcaline_geometry::Pose2::new(k as f64, 0.5, 0.1 * k as f64);
+        let scan = Scan::new(-1.0, 0.01, 0.1, 30.0, vec![2.0; 100]).with_stamp(0.5);
+        let messages: Vec<(&str, Vec<u8>)> = (0..4)
+            .flat_map(|k| {
+                let t = k as f64 * 0.1;
+                [
+                    ("/odom", crate::encode_odometry_cdr(t, &pose(k), "odom", "base_link")),
+                    ("/wheel", crate::encode_odometry_cdr(t, &pose(10 + k), "odom", "base")),
+                    ("/scan", encode_laserscan_cdr(&scan, "laser")),
+                ]
+            })
+            .collect();
+        // MCAP.
+        let mcap_path = dir.join("odom.mcap");
+        {
+            let file = std::io::BufWriter::new(std::fs::File::create(&mcap_path).unwrap());
+            let mut w = mcap::Writer::new(file).unwrap();
+            let scans = w.add_schema(ROS2_TYPE, "ros2msg", b"").unwrap();
+            let odom = w.add_schema(ROS2_ODOMETRY, "ros2msg", b"").unwrap();
+            let mut channels = BTreeMap::new();
+            for (k, (topic, data)) in messages.iter().enumerate() {
+                let schema = if *topic == "/scan" { scans } else { odom };
+                let ch = *channels.entry(*topic).or_insert_with(|| {
+                    w.add_channel(schema, topic, "cdr", &BTreeMap::new()).unwrap()
+                });
+                let header = mcap::records::MessageHeader {
+                    channel_id: ch,
+                    sequence: k as u32,
+                    log_time: k as u64,
+                    publish_time: k as u64,
+                };
+                w.write_to_known_channel(&header, data).unwrap();
+            }
+            w.finish().unwrap();
+        }
+        // ROS 2 bag: the rosbag2 tables.
+        let db_path = dir.join("odom.db3");
+        {
+            let db = rusqlite::Connection::open(&db_path).unwrap();
+            db.execute_batch(
+                "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, \
+                 serialization_format TEXT, offered_qos_profiles TEXT); \
+                 CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, \
+                 timestamp INTEGER, data BLOB);",
+            )
+            .unwrap();
+            for (id, (name, ty)) in
+                [("/odom", ROS2_ODOMETRY), ("/wheel", ROS2_ODOMETRY), ("/scan", ROS2_TYPE)]
+                    .iter()
+                    .enumerate()
+            {
+                db.execute(
+                    "INSERT INTO topics VALUES (?1, ?2, ?3, 'cdr', '')",
+                    rusqlite::params![id as i64 + 1, name, ty],
+                )
+                .unwrap();
+            }
+            for (k, (topic, data)) in messages.iter().enumerate() {
+                let topic_id = match *topic {
+                    "/odom" => 1,
+                    "/wheel" => 2,
+                    _ => 3,
+                };
+                db.execute(
+                    "INSERT INTO messages VALUES (?1, ?2, ?3, ?4)",
+                    rusqlite::params![k as i64 + 1, topic_id, k as i64, data],
+                )
+                .unwrap();
+            }
+        }
+        for (path, format) in [(&mcap_path, LogFormat::Mcap), (&db_path, LogFormat::Ros2Bag)] {
+            let tracks = read_ros_odometry(path, format).unwrap();
+            assert_eq!(tracks.keys().collect::<Vec<_>>(), ["/odom", "/wheel"], "{format:?}");
+            for (topic, first) in [("/odom", 0), ("/wheel", 10)] {
+                let t = &tracks[topic];
+                assert_eq!(t.len(), 4);
+                for (k, r) in t.iter().enumerate() {
+                    assert_eq!(r.pose.x(), pose(first + k).x(), "{format:?} {topic}");
+                    assert!((r.stamp_s - k as f64 * 0.1).abs() < 1e-9);
+                }
+            }
+            let mut scans = 0;
+            crate::read_log(
+                path,
+                &crate::LogOptions { format: Some(format), ..Default::default() },
+                |r| {
+                    scans += usize::from(matches!(r, LogRecord::Scan(_)));
+                    ControlFlow::Continue(())
+                },
+            )
+            .unwrap();
+            assert_eq!(scans, 4, "{format:?}");
+        }
+        // Other formats have no such messages.
+        assert!(read_ros_odometry(&db_path, LogFormat::Json).unwrap().is_empty());
+        // A broken odometry message is an error naming it.
+        let db = rusqlite::Connection::open(&db_path).unwrap();
+        db.execute("UPDATE messages SET data = x'00010000' WHERE id = 4", []).unwrap();
+        drop(db);
+        let e = read_ros_odometry(&db_path, LogFormat::Ros2Bag).unwrap_err().to_string();
+        assert!(e.contains("message 4: Odometry: truncated"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn mcap_round_trip_with_topic_filter() {
