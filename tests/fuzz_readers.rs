@@ -1,7 +1,7 @@
 //! Every reader fed random bytes and truncated real files: an error or a
 //! result, never a panic, and the same records and error read whole
 //! (`read_log`) or in chunks parsed apart (`read_log_chunks`); the ROS
-//! odometry reader too (`read_ros_odometry`). Seeded.
+//! odometry and frames reader too (`read_ros_motion`). Seeded.
 
 #![allow(clippy::print_stderr)] // the loud report of a missing dataset
 
@@ -49,7 +49,7 @@ fn read_all(path: &Path, format: Option<LogFormat>) {
     // The odometry pass of `pcaline map` over the same file: a result or an
     // error, never a panic.
     if let Some(f) = format.or_else(|| LogFormat::detect(path).ok()) {
-        let _ = pcaline_io::read_ros_odometry(path, f);
+        let _ = pcaline_io::read_ros_motion(path, f, None);
     }
 }
 

@@ -71,15 +71,18 @@ pub struct MapArgs {
     /// `[vehicle_from_sensor]` when it is not the identity; else, for a log
     /// that stores both the laser's pose and the odometry pose with each
     /// scan (CARMEN), the offset between them when it is the same on the
-    /// first 200 scans (said on stderr); else the identity (the log's poses
-    /// are the sensor's).
+    /// first 200 scans; for a ROS log with odometry, its `/tf_static` chain
+    /// from the odometry's frame to the scans' (said on stderr); else the
+    /// identity (the log's poses are the sensor's).
     #[arg(long, value_name = "X_M,Y_M,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
     mount: Option<Pose2>,
     /// The `nav_msgs/Odometry` topic to use as the source (ROS 1, ROS 2 and
     /// MCAP logs). Default: the log's only Odometry topic; with several,
     /// none is guessed (LIDAR-only mode, and stderr lists them). Each scan
     /// takes the pose interpolated at its stamp from the messages either
-    /// side, within 1 s.
+    /// side, within 1 s. The LIDAR's mount comes from `/tf_static` (the
+    /// chain from the odometry's child frame to the scans' frame) unless
+    /// `--mount` or the configuration gives it.
     #[arg(long, value_name = "TOPIC")]
     odom_topic: Option<String>,
     /// Output folder.
@@ -149,15 +152,24 @@ fn mount_of_log(log: &std::path::Path, options: &pcaline_io::LogOptions) -> Opti
 enum RosOdometry {
     /// No `nav_msgs/Odometry` (or not a ROS log).
     None,
-    /// The topic used and its poses, sorted by stamp.
-    Track { topic: String, poses: Vec<pcaline_io::OdometryRecord> },
+    /// The topic used, its poses sorted by stamp, its vehicle frame, the
+    /// scans' frame, and the LIDAR's mount the static transforms give.
+    Track {
+        topic: String,
+        poses: Vec<pcaline_io::OdometryRecord>,
+        vehicle: String,
+        sensor: String,
+        mount: Option<Pose2>,
+    },
     /// Several topics and none chosen.
     Several(Vec<String>),
 }
 
 /// The `nav_msgs/Odometry` of a ROS 1, ROS 2 or MCAP log: the topic
-/// `chosen`, else the only one. A chosen topic the log does not have is an
-/// error listing those it has.
+/// `chosen`, else the only one, with the mount from its child frame to the
+/// scans' frame through `/tf_static` (the identity when they are one
+/// frame). A chosen topic the log does not have is an error listing those
+/// it has.
 fn ros_odometry(
     log: &std::path::Path,
     options: &pcaline_io::LogOptions,
@@ -167,7 +179,8 @@ fn ros_odometry(
         Some(f) => f,
         None => pcaline_io::LogFormat::detect(log)?,
     };
-    let mut tracks = pcaline_io::read_ros_odometry(log, format)?;
+    let mut motion = pcaline_io::read_ros_motion(log, format, options.topic.as_deref())?;
+    let tracks = &mut motion.odometry;
     let topic = match chosen {
         Some(t) if tracks.contains_key(t) => t.to_string(),
         Some(t) => {
@@ -181,11 +194,15 @@ fn ros_odometry(
         }
         None if tracks.len() == 1 => tracks.keys().next().cloned().unwrap_or_default(),
         None if tracks.is_empty() => return Ok(RosOdometry::None),
-        None => return Ok(RosOdometry::Several(tracks.into_keys().collect())),
+        None => return Ok(RosOdometry::Several(tracks.keys().cloned().collect())),
     };
-    let mut poses = tracks.remove(&topic).unwrap_or_default();
+    let track = tracks.remove(&topic).unwrap_or_default();
+    let mut poses = track.records;
     poses.sort_by(|a, b| a.stamp_s.total_cmp(&b.stamp_s));
-    Ok(RosOdometry::Track { topic, poses })
+    let vehicle = track.child_frame_id;
+    let sensor = motion.scan_frame.unwrap_or_default();
+    let mount = pcaline_io::mount_from_transforms(&motion.static_transforms, &vehicle, &sensor);
+    Ok(RosOdometry::Track { topic, poses, vehicle, sensor, mount })
 }
 
 /// Odometry messages farther apart than this do not bracket a scan, seconds.
@@ -232,17 +249,43 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
     let sensor = args.input.sensor(&args.log, config.sensor)?;
-    let mount = match args.mount {
-        Some(m) => m,
-        None if config.vehicle_from_sensor != Pose2::identity() => config.vehicle_from_sensor,
-        None => match mount_of_log(&args.log, &args.input.options()?) {
+    let options = args.input.options()?;
+    let odometry = ros_odometry(&args.log, &options, args.odom_topic.as_deref())?;
+    let log = args.log.display();
+    // Where the LIDAR sits: as told, else as the log says (a CARMEN log's
+    // two poses, a ROS log's static transforms), else at the vehicle's origin.
+    let told = args.mount.or(Some(config.vehicle_from_sensor).filter(|m| *m != Pose2::identity()));
+    let mount = match (told, &odometry) {
+        (Some(m), _) => m,
+        (None, RosOdometry::Track { mount: Some(m), vehicle, sensor, .. }) => {
+            if !quiet && *m != Pose2::identity() {
+                eprintln!(
+                    "{log}: the scans' frame {sensor} lies {:.3} m forward, {:.3} m left and \
+                     {:.2}° turned from the odometry's {vehicle} (/tf_static): taken as the \
+                     LIDAR's mount (--mount overrides)",
+                    m.x(),
+                    m.y(),
+                    m.heading().to_degrees()
+                );
+            }
+            *m
+        }
+        (None, RosOdometry::Track { mount: None, vehicle, sensor, .. }) => {
+            if !quiet {
+                eprintln!(
+                    "{log}: no /tf_static chain from the odometry's {vehicle} to the scans' \
+                     frame {sensor}: the LIDAR taken at {vehicle} unless --mount says where"
+                );
+            }
+            Pose2::identity()
+        }
+        (None, _) => match mount_of_log(&args.log, &options) {
             Some(m) => {
                 if !quiet {
                     eprintln!(
-                        "{}: each scan's laser pose lies {:.3} m forward, {:.3} m left and \
+                        "{log}: each scan's laser pose lies {:.3} m forward, {:.3} m left and \
                          {:.2}° turned from its odometry pose: taken as the LIDAR's mount \
                          (--mount overrides)",
-                        args.log.display(),
                         m.x(),
                         m.y(),
                         m.heading().to_degrees()
@@ -258,19 +301,14 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             .with_loop_closure((!args.no_loop_closure).then_some(config.loop_closure))
             .with_mount(mount),
     )?;
-    let odometry = ros_odometry(&args.log, &args.input.options()?, args.odom_topic.as_deref())?;
     if !quiet {
         match &odometry {
-            RosOdometry::Track { topic, poses } => eprintln!(
-                "{}: odometry from {topic} ({} messages) as the source, the LIDAR at its child \
-                 frame unless --mount says where",
-                args.log.display(),
-                poses.len()
-            ),
+            RosOdometry::Track { topic, poses, .. } => {
+                eprintln!("{log}: odometry from {topic} ({} messages) as the source", poses.len())
+            }
             RosOdometry::Several(topics) => eprintln!(
-                "{}: several nav_msgs/Odometry topics ({}): give one with --odom-topic; none \
+                "{log}: several nav_msgs/Odometry topics ({}): give one with --odom-topic; none \
                  is used",
-                args.log.display(),
                 topics.join(", ")
             ),
             RosOdometry::None => {}

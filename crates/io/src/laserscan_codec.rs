@@ -45,6 +45,24 @@ pub fn decode_laserscan_cdr(data: &[u8]) -> Result<Scan, String> {
     body(&mut c, f64::from(sec) + f64::from(nanosec) * 1e-9)
 }
 
+/// The `frame_id` of a CDR `sensor_msgs/msg/LaserScan` (the header alone
+/// is read), without a leading `/`.
+pub(crate) fn laserscan_frame_cdr(data: &[u8]) -> Result<String, String> {
+    let mut c = Cursor::cdr(data)?;
+    c.u32("header.stamp.sec")?;
+    c.u32("header.stamp.nanosec")?;
+    Ok(crate::tf_codec::frame_name(&c.string("header.frame_id")?))
+}
+
+/// The `frame_id` of a ROS 1 `sensor_msgs/LaserScan`.
+pub(crate) fn laserscan_frame_ros1(data: &[u8]) -> Result<String, String> {
+    let mut c = Cursor::ros1(data);
+    c.u32("header.seq")?;
+    c.u32("header.stamp.secs")?;
+    c.u32("header.stamp.nsecs")?;
+    Ok(crate::tf_codec::frame_name(&c.string("header.frame_id")?))
+}
+
 /// Decodes a ROS 1 `sensor_msgs/LaserScan`.
 pub fn decode_laserscan_ros1(data: &[u8]) -> Result<Scan, String> {
     let mut c = Cursor::ros1(data);

@@ -27,6 +27,7 @@ mod ros;
 mod ros_cursor;
 mod scan_text;
 mod scene_file;
+mod tf_codec;
 
 pub use atomic::{AtomicFile, OutputSet, remove_temporary_files, write_atomic, write_atomic_with};
 pub use carmen::{CarmenOptions, CarmenReader};
@@ -45,12 +46,15 @@ pub use log::{LogFormat, LogOptions, MAX_COORDINATE_M, check_record, check_scan_
 pub use log_chunks::{LogChunk, read_log_chunks};
 pub use mount::{
     MOUNT_AGREEMENT_M, MOUNT_AGREEMENT_RAD, MOUNT_MAX_M, MOUNT_MIN_PAIRS, MOUNT_TRIVIAL_M,
-    MOUNT_TRIVIAL_RAD, mount_from_pose_pairs,
+    MOUNT_TRIVIAL_RAD, mount_from_pose_pairs, mount_from_transforms,
 };
-pub use odometry_codec::{decode_odometry_cdr, decode_odometry_ros1, encode_odometry_cdr};
+pub use odometry_codec::{
+    OdometryMessage, decode_odometry_cdr, decode_odometry_ros1, encode_odometry_cdr,
+};
 pub use pcaline_geometry::Relation;
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
 pub use relations::{ScanPair, read_relations, read_scan_pairs};
-pub use ros::{read_mcap, read_ros_odometry, read_ros1_bag, read_ros2_bag};
+pub use ros::{OdometryTrack, RosMotion, read_mcap, read_ros_motion, read_ros1_bag, read_ros2_bag};
 pub use scan_text::{ScanJson, read_scan_csv, read_scan_json, scans_to_csv};
 pub use scene_file::{parse_scene, read_scene, write_scene};
+pub use tf_codec::{FrameTransform, decode_tf_cdr, decode_tf_ros1, encode_tf_cdr};

@@ -8,7 +8,12 @@
 //!
 //! A log whose two poses are a corrected and a raw estimate (some
 //! GMapping outputs) differs by a transform that drifts: no mount.
+//!
+//! A ROS log says it in its static transforms instead (`/tf_static`): the
+//! chain from the odometry's child frame to the scans' frame
+//! ([`mount_from_transforms`]).
 
+use crate::FrameTransform;
 use pcaline_geometry::{Pose2, wrap_angle};
 
 /// The pose pairs of a mount agree with the first to within this, metres ...
@@ -73,12 +78,91 @@ pub fn mount_from_pose_pairs(pairs: &[(Pose2, Pose2)]) -> Option<Pose2> {
     (!trivial && offset_m <= MOUNT_MAX_M).then_some(first)
 }
 
+/// The pose of frame `sensor` in frame `vehicle` through the tree of
+/// `transforms` (each child's pose in its parent; a transform may be
+/// walked either way), or `None` when no chain joins them. The same frame
+/// gives the identity. Frame names are compared without a leading `/`.
+/// Of several chains, the one with fewest transforms is taken; a
+/// non-finite result is `None`.
+///
+/// ```
+/// use pcaline_geometry::Pose2;
+/// use pcaline_io::{FrameTransform, mount_from_transforms};
+/// let t = |p: &str, c: &str, x: f64| FrameTransform {
+///     parent: p.into(),
+///     child: c.into(),
+///     parent_from_child: Pose2::new(x, 0.0, 0.0),
+/// };
+/// let tree = [t("base_footprint", "base_link", 0.1), t("base_link", "laser", 0.2)];
+/// let m = mount_from_transforms(&tree, "base_footprint", "/laser").unwrap();
+/// assert!((m.x() - 0.3).abs() < 1e-12);
+/// assert!(mount_from_transforms(&tree, "laser", "camera").is_none());
+/// ```
+pub fn mount_from_transforms(
+    transforms: &[FrameTransform],
+    vehicle: &str,
+    sensor: &str,
+) -> Option<Pose2> {
+    let (vehicle, sensor) = (vehicle.trim_start_matches('/'), sensor.trim_start_matches('/'));
+    // Breadth-first from the vehicle: each frame reached with its pose in
+    // the vehicle's frame.
+    let mut reached: Vec<(&str, Pose2)> = vec![(vehicle, Pose2::identity())];
+    let mut next = 0;
+    while next < reached.len() {
+        let (frame, vehicle_from_frame) = reached[next];
+        next += 1;
+        if frame == sensor {
+            return vehicle_from_frame.is_finite().then_some(vehicle_from_frame);
+        }
+        for t in transforms {
+            let step = if t.parent == frame {
+                Some((t.child.as_str(), t.parent_from_child))
+            } else if t.child == frame {
+                Some((t.parent.as_str(), t.parent_from_child.inverse()))
+            } else {
+                None
+            };
+            if let Some((other, frame_from_other)) = step
+                && reached.iter().all(|(f, _)| *f != other)
+            {
+                reached.push((other, vehicle_from_frame.compose(&frame_from_other)));
+            }
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn path(n: usize) -> Vec<Pose2> {
         (0..n).map(|i| Pose2::new(0.7 * i as f64, (0.3 * i as f64).sin(), 0.4 * i as f64)).collect()
+    }
+
+    #[test]
+    fn a_chain_walked_both_ways_composes() {
+        let t = |p: &str, c: &str, pose: Pose2| FrameTransform {
+            parent: p.into(),
+            child: c.into(),
+            parent_from_child: pose,
+        };
+        // odom -> base_link -> plate -> laser, with the laser's frame turned.
+        let tree = [
+            t("odom", "base_link", Pose2::new(5.0, 5.0, 1.0)),
+            t("base_link", "plate", Pose2::new(0.1, 0.0, 0.5)),
+            t("plate", "laser", Pose2::new(0.2, 0.05, -0.5)),
+        ];
+        let m = mount_from_transforms(&tree, "base_link", "laser").unwrap();
+        let want = Pose2::new(0.1, 0.0, 0.5).compose(&Pose2::new(0.2, 0.05, -0.5));
+        let d = want.between(&m);
+        assert!(d.x().hypot(d.y()) < 1e-12 && d.heading().abs() < 1e-12, "{m:?}");
+        // The other way round: the inverse.
+        let back = mount_from_transforms(&tree, "laser", "base_link").unwrap();
+        let d = m.inverse().between(&back);
+        assert!(d.x().hypot(d.y()) < 1e-12, "{back:?}");
+        assert_eq!(mount_from_transforms(&tree, "laser", "laser"), Some(Pose2::identity()));
+        assert_eq!(mount_from_transforms(&[], "base_link", "laser"), None);
     }
 
     #[test]

@@ -9,7 +9,19 @@
 //! the header's frame (`odom`); the heading is the quaternion's yaw.
 
 use crate::ros_cursor::Cursor;
+use crate::tf_codec::frame_name;
 use pcaline_geometry::Pose2;
+
+/// What a planar source takes from a `nav_msgs/Odometry`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OdometryMessage {
+    /// The header's stamp, seconds.
+    pub stamp_s: f64,
+    /// The child frame's planar pose in the header's frame.
+    pub pose: Pose2,
+    /// The child frame (the vehicle's, `base_link`), without a leading `/`.
+    pub child_frame_id: String,
+}
 
 /// The yaw of the unit quaternion `(x, y, z, w)`, radians: the rotation
 /// about z of its projection on the plane (a tilted vehicle's heading).
@@ -42,29 +54,31 @@ fn pose(c: &mut Cursor<'_>) -> Result<Pose2, String> {
 /// use pcaline_geometry::Pose2;
 /// use pcaline_io::{decode_odometry_cdr, encode_odometry_cdr};
 /// let bytes = encode_odometry_cdr(12.5, &Pose2::new(1.0, -2.0, 0.3), "odom", "base_link");
-/// let (stamp_s, pose) = decode_odometry_cdr(&bytes).unwrap();
-/// assert_eq!(stamp_s, 12.5);
-/// assert!((pose.heading() - 0.3).abs() < 1e-12 && pose.x() == 1.0);
+/// let m = decode_odometry_cdr(&bytes).unwrap();
+/// assert_eq!((m.stamp_s, m.child_frame_id.as_str()), (12.5, "base_link"));
+/// assert!((m.pose.heading() - 0.3).abs() < 1e-12 && m.pose.x() == 1.0);
 /// ```
-pub fn decode_odometry_cdr(data: &[u8]) -> Result<(f64, Pose2), String> {
+pub fn decode_odometry_cdr(data: &[u8]) -> Result<OdometryMessage, String> {
     let mut c = Cursor::cdr(data)?;
     let sec = c.u32("header.stamp.sec")? as i32;
     let nanosec = c.u32("header.stamp.nanosec")?;
     let _frame = c.string("header.frame_id")?;
-    let _child = c.string("child_frame_id")?;
-    Ok((f64::from(sec) + f64::from(nanosec) * 1e-9, pose(&mut c)?))
+    let child_frame_id = frame_name(&c.string("child_frame_id")?);
+    let stamp_s = f64::from(sec) + f64::from(nanosec) * 1e-9;
+    Ok(OdometryMessage { stamp_s, pose: pose(&mut c)?, child_frame_id })
 }
 
 /// Decodes a ROS 1 `nav_msgs/Odometry` to its stamp and planar pose (as
 /// [`decode_odometry_cdr`]).
-pub fn decode_odometry_ros1(data: &[u8]) -> Result<(f64, Pose2), String> {
+pub fn decode_odometry_ros1(data: &[u8]) -> Result<OdometryMessage, String> {
     let mut c = Cursor::ros1(data);
     let _seq = c.u32("header.seq")?;
     let sec = c.u32("header.stamp.secs")?;
     let nsec = c.u32("header.stamp.nsecs")?;
     let _frame = c.string("header.frame_id")?;
-    let _child = c.string("child_frame_id")?;
-    Ok((f64::from(sec) + f64::from(nsec) * 1e-9, pose(&mut c)?))
+    let child_frame_id = frame_name(&c.string("child_frame_id")?);
+    let stamp_s = f64::from(sec) + f64::from(nsec) * 1e-9;
+    Ok(OdometryMessage { stamp_s, pose: pose(&mut c)?, child_frame_id })
 }
 
 /// Encodes a little-endian CDR `nav_msgs/msg/Odometry` of the planar pose
@@ -112,8 +126,10 @@ mod tests {
         for frame in ["", "o", "od", "odom", "odom_frame", "map_odometry"] {
             let p = Pose2::new(-3.25, 7.5, -2.9);
             let bytes = encode_odometry_cdr(1234.75, &p, frame, "base_link");
-            let (t, q) = decode_odometry_cdr(&bytes).unwrap();
+            let m = decode_odometry_cdr(&bytes).unwrap();
+            let (t, q) = (m.stamp_s, m.pose);
             assert_eq!(t, 1234.75, "{frame:?}");
+            assert_eq!(m.child_frame_id, "base_link");
             assert_eq!((q.x(), q.y()), (p.x(), p.y()), "{frame:?}");
             assert!((q.heading() - p.heading()).abs() < 1e-12, "{frame:?}");
         }
@@ -134,7 +150,8 @@ mod tests {
         for v in [2.0, 3.0, 0.0, 0.0, 0.0, h.sin(), h.cos()] {
             data.extend_from_slice(&f64::to_le_bytes(v));
         }
-        let (t, p) = decode_odometry_ros1(&data).unwrap();
+        let m = decode_odometry_ros1(&data).unwrap();
+        let (t, p) = (m.stamp_s, m.pose);
         assert_eq!(t, 100.5);
         assert_eq!((p.x(), p.y()), (2.0, 3.0));
         assert!((p.heading() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);

@@ -1,10 +1,14 @@
 //! ROS logs: ROS 1 bags (format 2.0, via `rosbag`), ROS 2 bags (sqlite3
 //! `.db3`, via `rusqlite` with the bundled SQLite), and MCAP (via `mcap`),
 //! yielding every `sensor_msgs/LaserScan` (optionally of one topic); and
-//! their `nav_msgs/Odometry`, topic by topic ([`read_ros_odometry`]).
+//! their `nav_msgs/Odometry` topic by topic, the scans' frame and the
+//! static transforms ([`read_ros_motion`]).
 
-use crate::laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1};
+use crate::laserscan_codec::{
+    decode_laserscan_cdr, decode_laserscan_ros1, laserscan_frame_cdr, laserscan_frame_ros1,
+};
 use crate::odometry_codec::{decode_odometry_cdr, decode_odometry_ros1};
+use crate::tf_codec::{decode_tf_cdr, decode_tf_ros1};
 use crate::{IoError, LogFormat, LogRecord, OdometryRecord, ScanRecord};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::ops::ControlFlow;
@@ -14,6 +18,8 @@ const ROS1_TYPE: &str = "sensor_msgs/LaserScan";
 const ROS2_TYPE: &str = "sensor_msgs/msg/LaserScan";
 const ROS1_ODOMETRY: &str = "nav_msgs/Odometry";
 const ROS2_ODOMETRY: &str = "nav_msgs/msg/Odometry";
+const ROS1_TF: &str = "tf2_msgs/TFMessage";
+const ROS2_TF: &str = "tf2_msgs/msg/TFMessage";
 
 /// The messages a pass over a ROS log takes: one type (its ROS 1 and ROS 2
 /// names), optionally of one topic.
@@ -336,41 +342,84 @@ fn mcap_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Resu
     Ok(pass)
 }
 
-/// The `nav_msgs/Odometry` of a ROS log (ROS 1 bag, ROS 2 bag or MCAP), by
-/// topic, each topic's records in the file's order (positions as the scan
-/// readers give them). A format without such messages, or a log without
-/// any, gives an empty map. Errors name the file and the message; a pose
-/// that is not finite or beyond [`crate::MAX_COORDINATE_M`] is an error, as
-/// in every reader.
-pub fn read_ros_odometry(
+/// The odometry of a ROS log and what places its LIDAR on the vehicle
+/// ([`read_ros_motion`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+#[non_exhaustive]
+pub struct RosMotion {
+    /// Each `nav_msgs/Odometry` topic's messages.
+    pub odometry: BTreeMap<String, OdometryTrack>,
+    /// The `frame_id` of the first LaserScan (of the topic asked for), without
+    /// a leading `/`.
+    pub scan_frame: Option<String>,
+    /// Every transform on `/tf_static`.
+    pub static_transforms: Vec<crate::FrameTransform>,
+}
+
+/// The messages of one `nav_msgs/Odometry` topic.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[non_exhaustive]
+pub struct OdometryTrack {
+    /// The first message's `child_frame_id` (the vehicle's frame).
+    pub child_frame_id: String,
+    /// The poses in the file's order (positions as the scan readers give
+    /// them).
+    pub records: Vec<OdometryRecord>,
+}
+
+/// The `nav_msgs/Odometry` of a ROS log (ROS 1 bag, ROS 2 bag or MCAP) by
+/// topic, the frame of its LaserScans (of `scan_topic` when given) and its
+/// `/tf_static` transforms: what `pcaline map` needs to use the odometry
+/// as the source and place the LIDAR on the vehicle. Another format, or a
+/// log without them, gives them empty. Errors name the file and the
+/// message; a pose or stamp that is not finite, or beyond
+/// [`crate::MAX_COORDINATE_M`], is an error as in every reader.
+pub fn read_ros_motion(
     path: &Path,
     format: LogFormat,
-) -> Result<BTreeMap<String, Vec<OdometryRecord>>, IoError> {
-    let wanted = Wanted { ros1_type: ROS1_ODOMETRY, ros2_type: ROS2_ODOMETRY, topic: None };
-    let mut tracks: BTreeMap<String, Vec<OdometryRecord>> = BTreeMap::new();
-    type Decoded = Result<(f64, pcaline_geometry::Pose2), String>;
-    let mut take = |file: &Path, topic: &str, position: usize, decoded: Decoded| {
+    scan_topic: Option<&str>,
+) -> Result<RosMotion, IoError> {
+    let mut motion = RosMotion::default();
+    let (messages, cdr): (MessagePass, bool) = match format {
+        LogFormat::Ros1Bag => (ros1_messages, false),
+        LogFormat::Ros2Bag => (ros2_messages, true),
+        LogFormat::Mcap => (mcap_messages, true),
+        _ => return Ok(motion),
+    };
+    let odometry = Wanted { ros1_type: ROS1_ODOMETRY, ros2_type: ROS2_ODOMETRY, topic: None };
+    messages(path, odometry, &mut |file, topic, position, data| {
         let what =
             |e: String| IoError::parse(file, None, format!("message {position}: Odometry: {e}"));
-        let (stamp_s, pose) = decoded.map_err(what)?;
-        let record = OdometryRecord { pose, stamp_s, position };
+        let m = if cdr { decode_odometry_cdr(data) } else { decode_odometry_ros1(data) };
+        let m = m.map_err(what)?;
+        let record = OdometryRecord { pose: m.pose, stamp_s: m.stamp_s, position };
         crate::check_record(&LogRecord::Odometry(record)).map_err(what)?;
-        tracks.entry(topic.to_string()).or_default().push(record);
+        let track = motion.odometry.entry(topic.to_string()).or_insert_with(|| OdometryTrack {
+            child_frame_id: m.child_frame_id,
+            records: Vec::new(),
+        });
+        track.records.push(record);
         Ok(ControlFlow::Continue(()))
-    };
-    match format {
-        LogFormat::Ros1Bag => {
-            ros1_messages(path, wanted, &mut |f, t, i, d| take(f, t, i, decode_odometry_ros1(d)))?
-        }
-        LogFormat::Ros2Bag => {
-            ros2_messages(path, wanted, &mut |f, t, i, d| take(f, t, i, decode_odometry_cdr(d)))?
-        }
-        LogFormat::Mcap => {
-            mcap_messages(path, wanted, &mut |f, t, i, d| take(f, t, i, decode_odometry_cdr(d)))?
-        }
-        _ => return Ok(tracks),
-    };
-    Ok(tracks)
+    })?;
+    let tf = Wanted { ros1_type: ROS1_TF, ros2_type: ROS2_TF, topic: Some("/tf_static") };
+    messages(path, tf, &mut |file, _, position, data| {
+        let t = if cdr { decode_tf_cdr(data) } else { decode_tf_ros1(data) };
+        let t = t.map_err(|e| {
+            IoError::parse(file, None, format!("message {position}: TFMessage: {e}"))
+        })?;
+        motion.static_transforms.extend(t);
+        Ok(ControlFlow::Continue(()))
+    })?;
+    let scans = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic: scan_topic };
+    messages(path, scans, &mut |file, _, position, data| {
+        let frame = if cdr { laserscan_frame_cdr(data) } else { laserscan_frame_ros1(data) };
+        let frame = frame.map_err(|e| {
+            IoError::parse(file, None, format!("message {position}: LaserScan: {e}"))
+        })?;
+        motion.scan_frame = Some(frame);
+        Ok(ControlFlow::Break(()))
+    })?;
+    Ok(motion)
 }
 
 #[cfg(test)]
@@ -380,23 +429,31 @@ mod tests {
     use pcaline_geometry::Scan;
     use std::collections::BTreeMap;
 
-    /// Odometry of two topics beside the scans, in an MCAP file and a ROS 2
-    /// bag: each topic's poses come back in order, the scans as before.
+    /// Odometry of two topics beside the scans and a static transform, in an
+    /// MCAP file and a ROS 2 bag: each topic's poses come back in order
+    /// with its vehicle frame, the scans' frame and the transform too, and
+    /// the scans read as before.
     #[test]
     fn odometry_is_read_topic_by_topic() {
         let dir = std::env::temp_dir().join(format!("pcaline-odom-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let pose = |k: usize| pcaline_geometry::Pose2::new(k as f64, 0.5, 0.1 * k as f64);
         let scan = Scan::new(-1.0, 0.01, 0.1, 30.0, vec![2.0; 100]).with_stamp(0.5);
-        let messages: Vec<(&str, Vec<u8>)> = (0..4)
-            .flat_map(|k| {
+        let laser = crate::FrameTransform {
+            parent: "base_link".into(),
+            child: "laser".into(),
+            parent_from_child: pcaline_geometry::Pose2::new(0.2, 0.0, 0.0),
+        };
+        let tf = ("/tf_static", crate::encode_tf_cdr(std::slice::from_ref(&laser)));
+        let messages: Vec<(&str, Vec<u8>)> = std::iter::once(tf)
+            .chain((0..4).flat_map(|k| {
                 let t = k as f64 * 0.1;
                 [
                     ("/odom", crate::encode_odometry_cdr(t, &pose(k), "odom", "base_link")),
                     ("/wheel", crate::encode_odometry_cdr(t, &pose(10 + k), "odom", "base")),
-                    ("/scan", encode_laserscan_cdr(&scan, "laser")),
+                    ("/scan", encode_laserscan_cdr(&scan, "/laser")),
                 ]
-            })
+            }))
             .collect();
         // MCAP.
         let mcap_path = dir.join("odom.mcap");
@@ -405,9 +462,14 @@ mod tests {
             let mut w = mcap::Writer::new(file).unwrap();
             let scans = w.add_schema(ROS2_TYPE, "ros2msg", b"").unwrap();
             let odom = w.add_schema(ROS2_ODOMETRY, "ros2msg", b"").unwrap();
+            let tf = w.add_schema(ROS2_TF, "ros2msg", b"").unwrap();
             let mut channels = BTreeMap::new();
             for (k, (topic, data)) in messages.iter().enumerate() {
-                let schema = if *topic == "/scan" { scans } else { odom };
+                let schema = match *topic {
+                    "/scan" => scans,
+                    "/tf_static" => tf,
+                    _ => odom,
+                };
                 let ch = *channels.entry(*topic).or_insert_with(|| {
                     w.add_channel(schema, topic, "cdr", &BTreeMap::new()).unwrap()
                 });
@@ -432,11 +494,13 @@ mod tests {
                  timestamp INTEGER, data BLOB);",
             )
             .unwrap();
-            for (id, (name, ty)) in
-                [("/odom", ROS2_ODOMETRY), ("/wheel", ROS2_ODOMETRY), ("/scan", ROS2_TYPE)]
-                    .iter()
-                    .enumerate()
-            {
+            let topics = [
+                ("/odom", ROS2_ODOMETRY),
+                ("/wheel", ROS2_ODOMETRY),
+                ("/scan", ROS2_TYPE),
+                ("/tf_static", ROS2_TF),
+            ];
+            for (id, (name, ty)) in topics.iter().enumerate() {
                 db.execute(
                     "INSERT INTO topics VALUES (?1, ?2, ?3, 'cdr', '')",
                     rusqlite::params![id as i64 + 1, name, ty],
@@ -447,7 +511,8 @@ mod tests {
                 let topic_id = match *topic {
                     "/odom" => 1,
                     "/wheel" => 2,
-                    _ => 3,
+                    "/scan" => 3,
+                    _ => 4,
                 };
                 db.execute(
                     "INSERT INTO messages VALUES (?1, ?2, ?3, ?4)",
@@ -457,12 +522,16 @@ mod tests {
             }
         }
         for (path, format) in [(&mcap_path, LogFormat::Mcap), (&db_path, LogFormat::Ros2Bag)] {
-            let tracks = read_ros_odometry(path, format).unwrap();
+            let motion = read_ros_motion(path, format, None).unwrap();
+            let tracks = &motion.odometry;
             assert_eq!(tracks.keys().collect::<Vec<_>>(), ["/odom", "/wheel"], "{format:?}");
-            for (topic, first) in [("/odom", 0), ("/wheel", 10)] {
+            assert_eq!(motion.scan_frame.as_deref(), Some("laser"));
+            assert_eq!(motion.static_transforms, std::slice::from_ref(&laser));
+            for (topic, first, vehicle) in [("/odom", 0, "base_link"), ("/wheel", 10, "base")] {
                 let t = &tracks[topic];
-                assert_eq!(t.len(), 4);
-                for (k, r) in t.iter().enumerate() {
+                assert_eq!(t.child_frame_id, vehicle);
+                assert_eq!(t.records.len(), 4);
+                for (k, r) in t.records.iter().enumerate() {
                     assert_eq!(r.pose.x(), pose(first + k).x(), "{format:?} {topic}");
                     assert!((r.stamp_s - k as f64 * 0.1).abs() < 1e-9);
                 }
@@ -480,13 +549,13 @@ mod tests {
             assert_eq!(scans, 4, "{format:?}");
         }
         // Other formats have no such messages.
-        assert!(read_ros_odometry(&db_path, LogFormat::Json).unwrap().is_empty());
+        assert_eq!(read_ros_motion(&db_path, LogFormat::Json, None).unwrap(), RosMotion::default());
         // A broken odometry message is an error naming it.
         let db = rusqlite::Connection::open(&db_path).unwrap();
-        db.execute("UPDATE messages SET data = x'00010000' WHERE id = 4", []).unwrap();
+        db.execute("UPDATE messages SET data = x'00010000' WHERE id = 5", []).unwrap();
         drop(db);
-        let e = read_ros_odometry(&db_path, LogFormat::Ros2Bag).unwrap_err().to_string();
-        assert!(e.contains("message 4: Odometry: truncated"), "{e}");
+        let e = read_ros_motion(&db_path, LogFormat::Ros2Bag, None).unwrap_err().to_string();
+        assert!(e.contains("message 5: Odometry: truncated"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -48,6 +48,11 @@ impl<'a> Cursor<'a> {
         Ok(s)
     }
 
+    /// Bytes left after the cursor.
+    pub(crate) fn remaining(&self) -> usize {
+        self.data.len().saturating_sub(self.pos)
+    }
+
     pub(crate) fn u32(&mut self, what: &str) -> Result<u32, String> {
         let b: [u8; 4] = self.take(4, what)?.try_into().map_err(|_| what.to_string())?;
         Ok(if self.little { u32::from_le_bytes(b) } else { u32::from_be_bytes(b) })

@@ -1,0 +1,169 @@
+//! `tf2_msgs/TFMessage` decoding (ROS 2 CDR and ROS 1), projected to the
+//! plane: each `geometry_msgs/TransformStamped` becomes the planar pose of
+//! its child frame in its parent frame. (And CDR encoding, for tests.)
+//!
+//! Layout: a sequence of `TransformStamped`, each a `Header` (stamp,
+//! frame_id: the parent), `child_frame_id`, then the translation (x, y, z)
+//! and the rotation (x, y, z, w) as float64.
+
+use crate::ros_cursor::Cursor;
+use pcaline_geometry::Pose2;
+
+/// One transform of a `tf2_msgs/TFMessage`, in the plane.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameTransform {
+    /// The parent frame (the header's `frame_id`), without a leading `/`.
+    pub parent: String,
+    /// The child frame, without a leading `/`.
+    pub child: String,
+    /// The child frame's pose in the parent's: x, y and the rotation's yaw
+    /// (z and the tilt dropped).
+    pub parent_from_child: Pose2,
+}
+
+/// A frame name as ROS 1 and ROS 2 write it, compared without its leading `/`.
+pub(crate) fn frame_name(name: &str) -> String {
+    name.trim_start_matches('/').to_string()
+}
+
+/// The transforms after the count, shared by both layouts; `ros1` reads a
+/// `seq` before each stamp.
+fn transforms(c: &mut Cursor<'_>, ros1: bool) -> Result<Vec<FrameTransform>, String> {
+    let n = c.u32("transforms")? as usize;
+    // Each transform is at least 7 doubles: a corrupt count must not
+    // become a huge allocation.
+    if n.saturating_mul(56) > c.remaining() {
+        return Err(format!("transforms: {n} do not fit in the message"));
+    }
+    let mut out = Vec::with_capacity(n);
+    for k in 0..n {
+        if ros1 {
+            c.u32("header.seq")?;
+        }
+        c.u32("header.stamp.sec")?;
+        c.u32("header.stamp.nanosec")?;
+        let parent = frame_name(&c.string("header.frame_id")?);
+        let child = frame_name(&c.string("child_frame_id")?);
+        let mut v = [0.0; 7];
+        for x in &mut v {
+            *x = c.f64("transform")?;
+        }
+        let (qx, qy, qz, qw) = (v[3], v[4], v[5], v[6]);
+        let norm = (qx * qx + qy * qy + qz * qz + qw * qw).sqrt();
+        if !(norm > 0.5 && norm < 1.5) {
+            return Err(format!("transform {k}: the rotation is not a unit quaternion"));
+        }
+        let yaw = (2.0 * (qw * qz + qx * qy)).atan2(1.0 - 2.0 * (qy * qy + qz * qz));
+        out.push(FrameTransform { parent, child, parent_from_child: Pose2::new(v[0], v[1], yaw) });
+    }
+    Ok(out)
+}
+
+/// Decodes a ROS 2 `tf2_msgs/msg/TFMessage` in CDR. Errors say what was
+/// being read where.
+///
+/// ```
+/// use pcaline_geometry::Pose2;
+/// use pcaline_io::{FrameTransform, decode_tf_cdr, encode_tf_cdr};
+/// let t = FrameTransform {
+///     parent: "base_link".into(),
+///     child: "laser".into(),
+///     parent_from_child: Pose2::new(0.2, 0.0, 0.1),
+/// };
+/// let back = decode_tf_cdr(&encode_tf_cdr(&[t.clone()])).unwrap();
+/// assert_eq!(back[0].child, "laser");
+/// assert!((back[0].parent_from_child.heading() - 0.1).abs() < 1e-12);
+/// ```
+pub fn decode_tf_cdr(data: &[u8]) -> Result<Vec<FrameTransform>, String> {
+    transforms(&mut Cursor::cdr(data)?, false)
+}
+
+/// Decodes a ROS 1 `tf2_msgs/TFMessage`.
+pub fn decode_tf_ros1(data: &[u8]) -> Result<Vec<FrameTransform>, String> {
+    transforms(&mut Cursor::ros1(data), true)
+}
+
+/// Encodes little-endian CDR `tf2_msgs/msg/TFMessage` of `transforms`
+/// (stamps 0, rotations about z).
+pub fn encode_tf_cdr(transforms: &[FrameTransform]) -> Vec<u8> {
+    let mut out = vec![0u8, 1, 0, 0];
+    let pad = |out: &mut Vec<u8>, n: usize| {
+        while !(out.len() - 4).is_multiple_of(n) {
+            out.push(0);
+        }
+    };
+    out.extend_from_slice(&(transforms.len() as u32).to_le_bytes());
+    for t in transforms {
+        pad(&mut out, 4);
+        out.extend_from_slice(&[0u8; 8]);
+        for name in [&t.parent, &t.child] {
+            pad(&mut out, 4);
+            out.extend_from_slice(&(name.len() as u32 + 1).to_le_bytes());
+            out.extend_from_slice(name.as_bytes());
+            out.push(0);
+        }
+        pad(&mut out, 8);
+        let p = &t.parent_from_child;
+        let (s, c) = (0.5 * p.heading()).sin_cos();
+        for v in [p.x(), p.y(), 0.0, 0.0, 0.0, s, c] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn two_transforms_round_trip_and_names_lose_their_slash() {
+        let ts = [
+            FrameTransform {
+                parent: "odom".into(),
+                child: "base".into(),
+                parent_from_child: Pose2::new(1.0, 2.0, -0.5),
+            },
+            FrameTransform {
+                parent: "/base".into(),
+                child: "laser_frame".into(),
+                parent_from_child: Pose2::new(0.3, -0.1, 3.0),
+            },
+        ];
+        let back = decode_tf_cdr(&encode_tf_cdr(&ts)).unwrap();
+        assert_eq!(back.len(), 2);
+        assert_eq!((back[1].parent.as_str(), back[1].child.as_str()), ("base", "laser_frame"));
+        assert!((back[1].parent_from_child.heading() - 3.0).abs() < 1e-12);
+        assert_eq!(back[0].parent_from_child.x(), 1.0);
+    }
+
+    #[test]
+    fn ros1_layout_is_packed() {
+        let mut data = 1u32.to_le_bytes().to_vec();
+        data.extend_from_slice(&[0u8; 12]); // seq, secs, nsecs
+        for name in ["/base_link", "laser"] {
+            data.extend_from_slice(&(name.len() as u32).to_le_bytes());
+            data.extend_from_slice(name.as_bytes());
+        }
+        for v in [0.25, 0.0, 0.1, 0.0, 0.0, 0.0, 1.0] {
+            data.extend_from_slice(&f64::to_le_bytes(v));
+        }
+        let t = decode_tf_ros1(&data).unwrap();
+        assert_eq!(t[0].parent, "base_link");
+        assert_eq!(t[0].parent_from_child, Pose2::new(0.25, 0.0, 0.0));
+        let e = decode_tf_ros1(&data[..data.len() - 4]).unwrap_err();
+        assert!(e.contains("transform"), "{e}");
+        let mut huge = data.clone();
+        huge[..4].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(decode_tf_ros1(&huge).unwrap_err().contains("do not fit"));
+    }
+
+    proptest! {
+        #[test]
+        fn random_bytes_never_panic(data in prop::collection::vec(any::<u8>(), 0..300)) {
+            let _ = decode_tf_cdr(&data);
+            let _ = decode_tf_ros1(&data);
+        }
+    }
+}
