@@ -258,7 +258,14 @@ impl Aiding {
         self.last_source = Some(*source_pose);
         match (self.corrected, increment) {
             (Some(_), Some(inc)) => self.step_increment(&inc, lines),
-            _ => self.process(*source_pose, Matrix3::zeros(), Prediction::Source, None, lines),
+            // The source resumes after scans without it: its frame is not
+            // the estimate's, and its motion since its last pose overlaps
+            // what the LIDAR-only steps estimated. This scan is predicted
+            // as those were; the next takes the source's increment.
+            (Some(previous), None) => self.step_constant_velocity(previous, lines),
+            (None, _) => {
+                self.process(*source_pose, Matrix3::zeros(), Prediction::Source, None, lines)
+            }
         }
     }
 
@@ -287,7 +294,10 @@ impl Aiding {
     /// the last estimated motion is repeated as the prediction, with
     /// [`crate::EstimatorConfig::constant_velocity`] noise, and the line
     /// matches estimate the motion. `stamp_s`, when given, is checked as in
-    /// [`Aiding::step_at`].
+    /// [`Aiding::step_at`]. A source given again later resumes from its
+    /// pose then: its first scan is predicted as here, the next ones by its
+    /// increments (its motion across the gap is not counted twice, and its
+    /// frame need not be the estimate's).
     pub fn step_without_source(
         &mut self,
         stamp_s: Option<f64>,
@@ -296,6 +306,7 @@ impl Aiding {
         if stamp_s.is_some_and(|t| self.stamp_went_backwards(t)) {
             return self.fall_back(Fallback::StampBackwards);
         }
+        self.last_source = None;
         let Some(previous) = self.corrected else {
             return self.process(
                 Pose2::identity(),
@@ -305,6 +316,16 @@ impl Aiding {
                 lines,
             );
         };
+        self.step_constant_velocity(previous, lines)
+    }
+
+    /// A scan predicted from `previous` by the last estimated motion
+    /// ([`Aiding::step_without_source`]).
+    fn step_constant_velocity(
+        &mut self,
+        previous: Pose2,
+        lines: &[impl ObservedLine],
+    ) -> (Pose2, StepReport) {
         let e = &self.config.estimator;
         let (motion, noise) = match (self.last_velocity, self.last_dt_s) {
             // Stamped: the velocity over the scan's own duration, wrong by at
@@ -990,6 +1011,39 @@ mod tests {
 
     fn aiding(config: AidingConfig) -> Aiding {
         Aiding::new(config, MapConfig::default()).unwrap()
+    }
+
+    /// A source that stops and comes back (a ROS log's odometry with a
+    /// dropout, or starting after the first scans): the scan it returns on
+    /// is predicted from the estimate's motion, and its motion across the
+    /// gap, which the LIDAR-only scans already estimated, is not added
+    /// again (before, the pose ran 2 m ahead here).
+    #[test]
+    fn a_source_that_resumes_does_not_count_the_gap_twice() {
+        let none: &[SensorLine] = &[];
+        let mut a = aiding(AidingConfig::estimator());
+        for k in 0..3 {
+            a.step_at(k as f64, &Pose2::new(k as f64, 0.0, 0.0), none);
+        }
+        for k in 3..5 {
+            let (pose, _) = a.step_without_source(Some(k as f64), none);
+            assert!((pose.x() - k as f64).abs() < 1e-9, "scan {k}: {pose:?}");
+        }
+        // The source comes back in a frame 10 m away: only its increments count.
+        for k in 5..8 {
+            let (pose, _) = a.step_at(k as f64, &Pose2::new(10.0 + k as f64, 0.0, 0.0), none);
+            assert!((pose.x() - k as f64).abs() < 1e-9, "scan {k}: {pose:?}");
+        }
+        // A source from the first scan on the LIDAR-only scans' frame: the
+        // same.
+        let mut b = aiding(AidingConfig::estimator());
+        b.step_without_source(Some(0.0), none);
+        let (pose, _) = b.step_at(1.0, &Pose2::new(-4.0, 7.0, 0.5), none);
+        assert_eq!(pose, Pose2::identity());
+        // One metre ahead in the source's body frame is one metre ahead here.
+        let (pose, _) =
+            b.step_at(2.0, &Pose2::new(-4.0 + 0.5f64.cos(), 7.0 + 0.5f64.sin(), 0.5), none);
+        assert!((pose.x() - 1.0).abs() < 1e-9 && pose.y().abs() < 1e-9, "{pose:?}");
     }
 
     #[test]
