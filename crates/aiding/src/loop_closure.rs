@@ -1074,6 +1074,16 @@ mod tests {
             .collect()
     }
 
+    /// Loop closing with the standard configuration over the estimator.
+    fn standard_slam() -> LoopClosing {
+        LoopClosing::new(
+            AidingConfig::estimator(),
+            MapConfig::default(),
+            LoopClosureConfig::standard(),
+        )
+        .unwrap()
+    }
+
     /// Laps around a room centred at `(cx, 0)`, 0.25 m per scan.
     fn laps(cx: f64, laps: usize) -> Vec<Pose2> {
         let n = 60;
@@ -1088,12 +1098,7 @@ mod tests {
     #[test]
     fn twin_rooms_do_not_close_a_false_loop() {
         let (a, b) = (room(0.0), room(20.0));
-        let mut slam = LoopClosing::new(
-            AidingConfig::estimator(),
-            MapConfig::default(),
-            LoopClosureConfig::standard(),
-        )
-        .unwrap();
+        let mut slam = standard_slam();
         // Three laps in room A, a corridor walk with no walls in view, three laps
         // in room B, with a slow heading drift in the source.
         let mut truth = laps(0.0, 3);
@@ -1190,12 +1195,7 @@ mod tests {
     #[test]
     fn a_skipped_scan_makes_no_keyframe() {
         let walls = room(0.0);
-        let mut slam = LoopClosing::new(
-            AidingConfig::estimator(),
-            MapConfig::default(),
-            LoopClosureConfig::standard(),
-        )
-        .unwrap();
+        let mut slam = standard_slam();
         let first = Pose2::new(1.0, 1.0, 0.0);
         slam.step_at(1.0, &first, &seen(&walls, &first));
         assert_eq!(slam.keyframes().len(), 1);
@@ -1218,12 +1218,7 @@ mod tests {
     #[test]
     fn scans_between_keyframes_blend_the_two_corrections() {
         let walls = room(0.0);
-        let mut slam = LoopClosing::new(
-            AidingConfig::estimator(),
-            MapConfig::default(),
-            LoopClosureConfig::standard(),
-        )
-        .unwrap();
+        let mut slam = standard_slam();
         // A keyframe each 0.5 m: scans at 0, 0.1, ..., 0.5 m along x.
         for k in 0..=5 {
             let p = Pose2::new(-1.0 + 0.1 * k as f64, 0.5, 0.0);

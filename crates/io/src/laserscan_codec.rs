@@ -39,38 +39,22 @@ fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
 /// encapsulation header). Errors say what was being read where.
 pub fn decode_laserscan_cdr(data: &[u8]) -> Result<Scan, String> {
     let mut c = Cursor::cdr(data)?;
-    let sec = c.u32("header.stamp.sec")? as i32;
-    let nanosec = c.u32("header.stamp.nanosec")?;
-    let _frame = c.string("header.frame_id")?;
-    body(&mut c, f64::from(sec) + f64::from(nanosec) * 1e-9)
+    let (stamp_s, _frame) = c.header()?;
+    body(&mut c, stamp_s)
 }
 
-/// The `frame_id` of a CDR `sensor_msgs/msg/LaserScan` (the header alone
-/// is read), without a leading `/`.
-pub(crate) fn laserscan_frame_cdr(data: &[u8]) -> Result<String, String> {
-    let mut c = Cursor::cdr(data)?;
-    c.u32("header.stamp.sec")?;
-    c.u32("header.stamp.nanosec")?;
-    Ok(crate::tf_codec::frame_name(&c.string("header.frame_id")?))
-}
-
-/// The `frame_id` of a ROS 1 `sensor_msgs/LaserScan`.
-pub(crate) fn laserscan_frame_ros1(data: &[u8]) -> Result<String, String> {
-    let mut c = Cursor::ros1(data);
-    c.u32("header.seq")?;
-    c.u32("header.stamp.secs")?;
-    c.u32("header.stamp.nsecs")?;
-    Ok(crate::tf_codec::frame_name(&c.string("header.frame_id")?))
+/// The `frame_id` of a LaserScan (the header alone is read), without a
+/// leading `/`: CDR, or ROS 1 with `ros1`.
+pub(crate) fn laserscan_frame(data: &[u8], ros1: bool) -> Result<String, String> {
+    let mut c = if ros1 { Cursor::ros1(data) } else { Cursor::cdr(data)? };
+    Ok(c.header()?.1)
 }
 
 /// Decodes a ROS 1 `sensor_msgs/LaserScan`.
 pub fn decode_laserscan_ros1(data: &[u8]) -> Result<Scan, String> {
     let mut c = Cursor::ros1(data);
-    let _seq = c.u32("header.seq")?;
-    let sec = c.u32("header.stamp.secs")?;
-    let nsec = c.u32("header.stamp.nsecs")?;
-    let _frame = c.string("header.frame_id")?;
-    body(&mut c, f64::from(sec) + f64::from(nsec) * 1e-9)
+    let (stamp_s, _frame) = c.header()?;
+    body(&mut c, stamp_s)
 }
 
 /// Encodes a scan as a little-endian CDR `sensor_msgs/msg/LaserScan`.

@@ -60,11 +60,8 @@ fn pose(c: &mut Cursor<'_>) -> Result<Pose2, String> {
 /// ```
 pub fn decode_odometry_cdr(data: &[u8]) -> Result<OdometryMessage, String> {
     let mut c = Cursor::cdr(data)?;
-    let sec = c.u32("header.stamp.sec")? as i32;
-    let nanosec = c.u32("header.stamp.nanosec")?;
-    let _frame = c.string("header.frame_id")?;
+    let (stamp_s, _frame) = c.header()?;
     let child_frame_id = frame_name(&c.string("child_frame_id")?);
-    let stamp_s = f64::from(sec) + f64::from(nanosec) * 1e-9;
     Ok(OdometryMessage { stamp_s, pose: pose(&mut c)?, child_frame_id })
 }
 
@@ -72,12 +69,8 @@ pub fn decode_odometry_cdr(data: &[u8]) -> Result<OdometryMessage, String> {
 /// [`decode_odometry_cdr`]).
 pub fn decode_odometry_ros1(data: &[u8]) -> Result<OdometryMessage, String> {
     let mut c = Cursor::ros1(data);
-    let _seq = c.u32("header.seq")?;
-    let sec = c.u32("header.stamp.secs")?;
-    let nsec = c.u32("header.stamp.nsecs")?;
-    let _frame = c.string("header.frame_id")?;
+    let (stamp_s, _frame) = c.header()?;
     let child_frame_id = frame_name(&c.string("child_frame_id")?);
-    let stamp_s = f64::from(sec) + f64::from(nsec) * 1e-9;
     Ok(OdometryMessage { stamp_s, pose: pose(&mut c)?, child_frame_id })
 }
 

@@ -4,9 +4,7 @@
 //! their `nav_msgs/Odometry` topic by topic, the scans' frame and the
 //! static transforms ([`read_ros_motion`]).
 
-use crate::laserscan_codec::{
-    decode_laserscan_cdr, decode_laserscan_ros1, laserscan_frame_cdr, laserscan_frame_ros1,
-};
+use crate::laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1, laserscan_frame};
 use crate::odometry_codec::{decode_odometry_cdr, decode_odometry_ros1};
 use crate::tf_codec::{decode_tf_cdr, decode_tf_ros1};
 use crate::{IoError, LogFormat, LogRecord, OdometryRecord, ScanRecord};
@@ -412,7 +410,7 @@ pub fn read_ros_motion(
     })?;
     let scans = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic: scan_topic };
     messages(path, scans, &mut |file, _, position, data| {
-        let frame = if cdr { laserscan_frame_cdr(data) } else { laserscan_frame_ros1(data) };
+        let frame = laserscan_frame(data, !cdr);
         let frame = frame.map_err(|e| {
             IoError::parse(file, None, format!("message {position}: LaserScan: {e}"))
         })?;

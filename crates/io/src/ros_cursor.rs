@@ -10,6 +10,8 @@ pub(crate) struct Cursor<'a> {
     little: bool,
     /// CDR aligns each primitive to its size; ROS 1 packs.
     align: bool,
+    /// ROS 1's `Header` starts with a `seq`.
+    ros1: bool,
 }
 
 impl<'a> Cursor<'a> {
@@ -24,12 +26,12 @@ impl<'a> Cursor<'a> {
             1 | 3 => true,
             k => return Err(format!("unknown CDR encapsulation kind {k}")),
         };
-        Ok(Cursor { data, pos: 4, base: 4, little, align: true })
+        Ok(Cursor { data, pos: 4, base: 4, little, align: true, ros1: false })
     }
 
     /// A reader of a ROS 1 message (packed, little-endian).
     pub(crate) fn ros1(data: &'a [u8]) -> Self {
-        Cursor { data, pos: 0, base: 0, little: true, align: false }
+        Cursor { data, pos: 0, base: 0, little: true, align: false, ros1: true }
     }
 
     pub(crate) fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
@@ -46,6 +48,19 @@ impl<'a> Cursor<'a> {
         let s = &self.data[self.pos..end];
         self.pos = end;
         Ok(s)
+    }
+
+    /// A `std_msgs/Header`: its stamp, seconds, and its `frame_id` without a
+    /// leading `/` (ROS 1's `seq` skipped; ROS 2's `sec` is signed).
+    pub(crate) fn header(&mut self) -> Result<(f64, String), String> {
+        if self.ros1 {
+            self.u32("header.seq")?;
+        }
+        let sec = self.u32("header.stamp.sec")?;
+        let sec = if self.ros1 { f64::from(sec) } else { f64::from(sec as i32) };
+        let nanosec = self.u32("header.stamp.nanosec")?;
+        let frame = self.string("header.frame_id")?;
+        Ok((sec + f64::from(nanosec) * 1e-9, frame.trim_start_matches('/').to_string()))
     }
 
     /// Bytes left after the cursor.

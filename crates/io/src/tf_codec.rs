@@ -26,9 +26,8 @@ pub(crate) fn frame_name(name: &str) -> String {
     name.trim_start_matches('/').to_string()
 }
 
-/// The transforms after the count, shared by both layouts; `ros1` reads a
-/// `seq` before each stamp.
-fn transforms(c: &mut Cursor<'_>, ros1: bool) -> Result<Vec<FrameTransform>, String> {
+/// The transforms after the count, shared by both layouts.
+fn transforms(c: &mut Cursor<'_>) -> Result<Vec<FrameTransform>, String> {
     let n = c.u32("transforms")? as usize;
     // Each transform is at least 7 doubles: a corrupt count must not
     // become a huge allocation.
@@ -37,12 +36,7 @@ fn transforms(c: &mut Cursor<'_>, ros1: bool) -> Result<Vec<FrameTransform>, Str
     }
     let mut out = Vec::with_capacity(n);
     for k in 0..n {
-        if ros1 {
-            c.u32("header.seq")?;
-        }
-        c.u32("header.stamp.sec")?;
-        c.u32("header.stamp.nanosec")?;
-        let parent = frame_name(&c.string("header.frame_id")?);
+        let (_stamp, parent) = c.header()?;
         let child = frame_name(&c.string("child_frame_id")?);
         let mut v = [0.0; 7];
         for x in &mut v {
@@ -75,12 +69,12 @@ fn transforms(c: &mut Cursor<'_>, ros1: bool) -> Result<Vec<FrameTransform>, Str
 /// assert!((back[0].parent_from_child.heading() - 0.1).abs() < 1e-12);
 /// ```
 pub fn decode_tf_cdr(data: &[u8]) -> Result<Vec<FrameTransform>, String> {
-    transforms(&mut Cursor::cdr(data)?, false)
+    transforms(&mut Cursor::cdr(data)?)
 }
 
 /// Decodes a ROS 1 `tf2_msgs/TFMessage`.
 pub fn decode_tf_ros1(data: &[u8]) -> Result<Vec<FrameTransform>, String> {
-    transforms(&mut Cursor::ros1(data), true)
+    transforms(&mut Cursor::ros1(data))
 }
 
 /// Encodes little-endian CDR `tf2_msgs/msg/TFMessage` of `transforms`
