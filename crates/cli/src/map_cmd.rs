@@ -148,9 +148,12 @@ fn mount_of_log(log: &std::path::Path, options: &pcaline_io::LogOptions) -> Opti
     read.ok().and_then(|_| pcaline_io::mount_from_pose_pairs(&pairs))
 }
 
-/// The odometry of a ROS log, as `map` takes it.
-enum RosOdometry {
-    /// No `nav_msgs/Odometry` (or not a ROS log).
+/// The odometry of a log that comes apart from its scans, as `map` takes
+/// it: a ROS log's `nav_msgs/Odometry`, or the `ODOM` lines of a CARMEN log
+/// whose scans carry no pose (`RAWLASER1`).
+enum LogOdometry {
+    /// None apart from the scans (a CARMEN log's posed scans, JSON, CSV, a
+    /// ROS log without `nav_msgs/Odometry`).
     None,
     /// The topic used, its poses sorted by stamp, its vehicle frame, the
     /// scans' frame, and the LIDAR's mount the static transforms give.
@@ -161,8 +164,55 @@ enum RosOdometry {
         sensor: String,
         mount: Option<Pose2>,
     },
+    /// A CARMEN log's `ODOM` poses, sorted by stamp.
+    CarmenOdom(Vec<pcaline_io::OdometryRecord>),
     /// Several topics and none chosen.
     Several(Vec<String>),
+}
+
+impl LogOdometry {
+    /// The poses that the scans' stamps are interpolated in.
+    fn poses(&self) -> Option<&[pcaline_io::OdometryRecord]> {
+        match self {
+            LogOdometry::Track { poses, .. } | LogOdometry::CarmenOdom(poses) => Some(poses),
+            LogOdometry::None | LogOdometry::Several(_) => None,
+        }
+    }
+}
+
+/// The odometry of `log` that comes apart from its scans: see
+/// [`LogOdometry`]. For a ROS log, [`ros_odometry`]; for a CARMEN log
+/// without posed scans, its `ODOM` lines.
+fn log_odometry(
+    log: &std::path::Path,
+    options: &pcaline_io::LogOptions,
+    chosen: Option<&str>,
+) -> Result<LogOdometry> {
+    let format = match options.format {
+        Some(f) => f,
+        None => pcaline_io::LogFormat::detect(log)?,
+    };
+    match format {
+        pcaline_io::LogFormat::Carmen if !pcaline_io::has_posed_scans(log)? => {
+            let mut poses = Vec::new();
+            pcaline_io::read_log(log, options, |record| {
+                if let pcaline_io::LogRecord::Odometry(o) = record {
+                    poses.push(o);
+                }
+                ControlFlow::Continue(())
+            })?;
+            if poses.is_empty() {
+                return Ok(LogOdometry::None);
+            }
+            // Stable: messages of one stamp keep the log's order.
+            poses.sort_by(|a, b| a.stamp_s.total_cmp(&b.stamp_s));
+            Ok(LogOdometry::CarmenOdom(poses))
+        }
+        pcaline_io::LogFormat::Ros1Bag
+        | pcaline_io::LogFormat::Ros2Bag
+        | pcaline_io::LogFormat::Mcap => ros_odometry(log, format, options, chosen),
+        _ => Ok(LogOdometry::None),
+    }
 }
 
 /// The `nav_msgs/Odometry` of a ROS 1, ROS 2 or MCAP log: the topic
@@ -172,13 +222,10 @@ enum RosOdometry {
 /// it has.
 fn ros_odometry(
     log: &std::path::Path,
+    format: pcaline_io::LogFormat,
     options: &pcaline_io::LogOptions,
     chosen: Option<&str>,
-) -> Result<RosOdometry> {
-    let format = match options.format {
-        Some(f) => f,
-        None => pcaline_io::LogFormat::detect(log)?,
-    };
+) -> Result<LogOdometry> {
     let mut motion = pcaline_io::read_ros_motion(log, format, options.topic.as_deref())?;
     let tracks = &mut motion.odometry;
     let topic = match chosen {
@@ -193,8 +240,8 @@ fn ros_odometry(
             .into());
         }
         None if tracks.len() == 1 => tracks.keys().next().cloned().unwrap_or_default(),
-        None if tracks.is_empty() => return Ok(RosOdometry::None),
-        None => return Ok(RosOdometry::Several(tracks.keys().cloned().collect())),
+        None if tracks.is_empty() => return Ok(LogOdometry::None),
+        None => return Ok(LogOdometry::Several(tracks.keys().cloned().collect())),
     };
     let track = tracks.remove(&topic).unwrap_or_default();
     let mut poses = track.records;
@@ -202,7 +249,7 @@ fn ros_odometry(
     let vehicle = track.child_frame_id;
     let sensor = motion.scan_frame.unwrap_or_default();
     let mount = pcaline_io::mount_from_transforms(&motion.static_transforms, &vehicle, &sensor);
-    Ok(RosOdometry::Track { topic, poses, vehicle, sensor, mount })
+    Ok(LogOdometry::Track { topic, poses, vehicle, sensor, mount })
 }
 
 /// Odometry messages farther apart than this do not bracket a scan, seconds.
@@ -250,14 +297,14 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     })?;
     let sensor = args.input.sensor(&args.log, config.sensor)?;
     let options = args.input.options()?;
-    let odometry = ros_odometry(&args.log, &options, args.odom_topic.as_deref())?;
+    let odometry = log_odometry(&args.log, &options, args.odom_topic.as_deref())?;
     let log = args.log.display();
     // Where the LIDAR sits: as told, else as the log says (a CARMEN log's
     // two poses, a ROS log's static transforms), else at the vehicle's origin.
     let told = args.mount.or(Some(config.vehicle_from_sensor).filter(|m| *m != Pose2::identity()));
     let mount = match (told, &odometry) {
         (Some(m), _) => m,
-        (None, RosOdometry::Track { mount: Some(m), vehicle, sensor, .. }) => {
+        (None, LogOdometry::Track { mount: Some(m), vehicle, sensor, .. }) => {
             if !quiet && *m != Pose2::identity() {
                 eprintln!(
                     "{log}: the scans' frame {sensor} lies {:.3} m forward, {:.3} m left and \
@@ -270,7 +317,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             }
             *m
         }
-        (None, RosOdometry::Track { mount: None, vehicle, sensor, .. }) => {
+        (None, LogOdometry::Track { mount: None, vehicle, sensor, .. }) => {
             if !quiet {
                 eprintln!(
                     "{log}: no /tf_static chain from the odometry's {vehicle} to the scans' \
@@ -303,15 +350,20 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     )?;
     if !quiet {
         match &odometry {
-            RosOdometry::Track { topic, poses, .. } => {
+            LogOdometry::Track { topic, poses, .. } => {
                 eprintln!("{log}: odometry from {topic} ({} messages) as the source", poses.len())
             }
-            RosOdometry::Several(topics) => eprintln!(
+            LogOdometry::CarmenOdom(poses) => eprintln!(
+                "{log}: its scans carry no pose: the odometry of its {} ODOM lines, \
+                 interpolated at each scan's stamp, is the source",
+                poses.len()
+            ),
+            LogOdometry::Several(topics) => eprintln!(
                 "{log}: several nav_msgs/Odometry topics ({}): give one with --odom-topic; none \
                  is used",
                 topics.join(", ")
             ),
-            RosOdometry::None => {}
+            LogOdometry::None => {}
         }
     }
     let bar = progress::spinner("scans", quiet);
@@ -328,10 +380,8 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         // Deskewed with the velocity of the last step (the source's, or the
         // estimator's without one), when the scan has its beam timing (ROS
         // time_increment).
-        let source = s.odometry.or(s.pose).or_else(|| match &odometry {
-            RosOdometry::Track { poses, .. } => odometry_at(poses, s.scan.stamp_s?),
-            _ => None,
-        });
+        let source =
+            s.odometry.or(s.pose).or_else(|| odometry_at(odometry.poses()?, s.scan.stamp_s?));
         let step = match source {
             Some(p) => mapper.process(&s.scan, &p),
             None => {

@@ -305,6 +305,85 @@ fn map_takes_the_lidar_mount_from_a_carmen_log_that_stores_it() {
     }
 }
 
+/// Intel's `FLASER` lines rewritten as a laser alone (`RAWLASER1`, no
+/// pose), with the poses as `ODOM` lines: at each scan's stamp and half way
+/// to the next (`with_odom`), or none.
+fn intel_as_rawlaser(text: &str, with_odom: bool) -> String {
+    let mut scans = Vec::new();
+    for line in text.lines() {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        if f.first() != Some(&"FLASER") {
+            continue;
+        }
+        let n: usize = f[1].parse().unwrap();
+        let number = |k: usize| f[k].parse::<f64>().unwrap();
+        let pose = pcaline::Pose2::new(number(5 + n), number(6 + n), number(7 + n));
+        let stamp = f[8 + n];
+        // Laser type 3 (simulated: no sensor profile, as FLASER), the
+        // angles FLASER's 180 beams imply.
+        let raw = format!(
+            "RAWLASER1 3 {} {} {} 81.83 0.01 0 {n} {} 0 {stamp} pippo {stamp}",
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::PI,
+            std::f64::consts::PI / 180.0,
+            f[2..2 + n].join(" ")
+        );
+        scans.push((number(8 + n), stamp.to_string(), pose, raw));
+    }
+    let mut out = String::new();
+    for (k, (t, stamp, pose, raw)) in scans.iter().enumerate() {
+        let odom = |p: &pcaline::Pose2, stamp: &str| {
+            format!("ODOM {} {} {} 0 0 0 {stamp} pippo {stamp}\n", p.x(), p.y(), p.heading())
+        };
+        if with_odom {
+            out.push_str(&odom(pose, stamp));
+        }
+        out.push_str(raw);
+        out.push('\n');
+        if let (true, Some((t_next, _, next, _))) = (with_odom, scans.get(k + 1)) {
+            let mid = format!("{:.4}", (t + t_next) / 2.0);
+            out.push_str(&odom(&pose.lerp(next, 0.5), &mid));
+        }
+    }
+    out
+}
+
+#[test]
+fn map_takes_a_laser_alone_and_its_odom_lines_from_a_carmen_log() {
+    // A CARMEN log of a laser alone writes `RAWLASER1` (no pose) and its
+    // motion, if any, in `ODOM` lines. Intel rewritten that way, with the
+    // poses as ODOM lines at each scan's stamp, must map exactly as the
+    // original; with the FLASER lines kept too (CARMEN's logger writes
+    // both), every scan must come once; without ODOM lines, LIDAR-only mode.
+    let Some(path) = data("intel/intel.gfs.log") else { return };
+    let text = std::fs::read_to_string(&path).unwrap();
+    let plain = tmp("rawlaser-flaser");
+    let out = pcaline(&["map", s(&path), "--out", s(&plain)]);
+    assert!(out.status.success());
+    let read = |dir: &Path, name: &str| std::fs::read(dir.join(name)).unwrap();
+    let raw = intel_as_rawlaser(&text, true);
+    let both = format!("{raw}{text}");
+    for (name, log_text) in [("raw", raw), ("both", both)] {
+        let log = tmp(&format!("intel-{name}.log"));
+        std::fs::write(&log, log_text).unwrap();
+        let dir = tmp(&format!("rawlaser-{name}"));
+        let out = pcaline(&["map", s(&log), "--out", s(&dir)]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{name}: {err}");
+        assert_eq!(err.contains("ODOM lines"), name == "raw", "{name}: {err}");
+        assert!(!err.contains("LIDAR-only"), "{name}: {err}");
+        for file in ["trajectory.json", "map.json"] {
+            assert!(read(&plain, file) == read(&dir, file), "{name}: {file} differs");
+        }
+    }
+    let log = tmp("intel-raw-alone.log");
+    std::fs::write(&log, intel_as_rawlaser(&text, false)).unwrap();
+    let out = pcaline(&["map", s(&log), "--no-loop-closure", "--out", s(&tmp("rawlaser-alone"))]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("910 scans without odometry (LIDAR-only mode"), "{err}");
+}
+
 #[test]
 fn reproduce_small() {
     let out = pcaline(&["--quiet", "reproduce", "table2", "--runs", "200", "--json"]);

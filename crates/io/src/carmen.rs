@@ -1,4 +1,5 @@
-//! CARMEN logs (`.clf`, `.log`): `FLASER`, `ROBOTLASER1`, `ODOM`; `PARAM`,
+//! CARMEN logs (`.clf`, `.log`): `FLASER`, `ROBOTLASER1`, `ODOM`, and
+//! `RAWLASER1` in a log without the first two ([`RawLaserScans`]); `PARAM`,
 //! `NEFF`, `SYNC` and other messages are skipped; `#` starts a comment.
 //! Streams line by line: a long log is never held in memory.
 //!
@@ -29,12 +30,71 @@ pub struct CarmenOptions {
     pub max_range_m: f64,
     /// Offset added to the log's timestamps, seconds.
     pub time_offset_s: f64,
+    /// Whether `RAWLASER1` lines are scans.
+    pub raw_laser: RawLaserScans,
 }
 
 impl Default for CarmenOptions {
     fn default() -> Self {
-        CarmenOptions { fov_rad: None, max_range_m: 80.0, time_offset_s: 0.0 }
+        CarmenOptions {
+            fov_rad: None,
+            max_range_m: 80.0,
+            time_offset_s: 0.0,
+            raw_laser: RawLaserScans::WhenNoPosedScans,
+        }
     }
+}
+
+/// Whether the `RAWLASER1` lines of a CARMEN log are read as scans.
+///
+/// CARMEN's logger writes the front laser twice when the robot module runs:
+/// as `RAWLASER1` (the driver's message, no pose) and as `FLASER` or
+/// `ROBOTLASER1` (the same scan with the robot's pose). A log of a laser
+/// alone has only `RAWLASER1`, its motion, if any, in `ODOM` lines. Reading
+/// both kinds would give every scan twice, so by default a log's
+/// `RAWLASER1` lines are scans only when it has no posed scan message.
+/// `RAWLASER2`-`4` (other lasers, such as a rear one) are never read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum RawLaserScans {
+    /// `RAWLASER1` lines are scans when the log has no `FLASER` or
+    /// `ROBOTLASER1` line. [`CarmenReader::open`] looks through the file
+    /// for one ([`has_posed_scans`]), stopping at the first; over a stream
+    /// ([`CarmenReader::new`]), which cannot be looked through first, this
+    /// is [`RawLaserScans::Never`].
+    #[default]
+    WhenNoPosedScans,
+    /// `RAWLASER1` lines are skipped.
+    Never,
+    /// `RAWLASER1` lines are scans, beside any `FLASER` or `ROBOTLASER1`.
+    Always,
+}
+
+/// Whether the CARMEN log at `path` has a posed scan message (a line whose
+/// first field is `FLASER` or `ROBOTLASER1`); reads up to the first one.
+/// Lines that are not UTF-8 text are passed over here: the reader reports
+/// them.
+pub fn has_posed_scans(path: &Path) -> Result<bool, IoError> {
+    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    let mut input = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        if input.read_until(b'\n', &mut line).map_err(|e| IoError::io(path, e))? == 0 {
+            return Ok(false);
+        }
+        if matches!(first_field(&line), b"FLASER" | b"ROBOTLASER1") {
+            return Ok(true);
+        }
+    }
+}
+
+/// The first whitespace-separated field of a line (empty for a blank line).
+pub(crate) fn first_field(line: &[u8]) -> &[u8] {
+    let start = line.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(line.len());
+    let rest = &line[start..];
+    let end = rest.iter().position(u8::is_ascii_whitespace).unwrap_or(rest.len());
+    &rest[..end]
 }
 
 /// 10^k for k up to 15: all exact in an `f64`.
@@ -153,15 +213,33 @@ pub struct CarmenReader<R> {
 }
 
 impl CarmenReader<std::io::BufReader<std::fs::File>> {
-    /// Opens a CARMEN log file.
+    /// Opens a CARMEN log file. With [`RawLaserScans::WhenNoPosedScans`]
+    /// the file is first looked through for a posed scan message.
     pub fn open(path: &Path, options: CarmenOptions) -> Result<Self, IoError> {
+        let options = resolve_raw_laser(path, options)?;
         let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
         Ok(Self::new(std::io::BufReader::new(file), path, options))
     }
 }
 
+/// `options` with [`RawLaserScans::WhenNoPosedScans`] decided for the log
+/// at `path`: [`RawLaserScans::Always`] when it has no posed scan message,
+/// else [`RawLaserScans::Never`].
+pub(crate) fn resolve_raw_laser(
+    path: &Path,
+    mut options: CarmenOptions,
+) -> Result<CarmenOptions, IoError> {
+    if options.raw_laser == RawLaserScans::WhenNoPosedScans {
+        options.raw_laser =
+            if has_posed_scans(path)? { RawLaserScans::Never } else { RawLaserScans::Always };
+    }
+    Ok(options)
+}
+
 impl<R: BufRead> CarmenReader<R> {
     /// A reader over any buffered input; `path` names it in errors.
+    /// [`RawLaserScans::WhenNoPosedScans`] is [`RawLaserScans::Never`]
+    /// here: a stream cannot be looked through first.
     pub fn new(input: R, path: &Path, options: CarmenOptions) -> Self {
         CarmenReader { input, path: path.to_path_buf(), options, line_no: 0, buf: String::new() }
     }
@@ -193,6 +271,9 @@ impl<R: BufRead> CarmenReader<R> {
             "FLASER" => self.flaser(&rest).map(Some),
             "ROBOTLASER1" => self.robotlaser(&rest).map(Some),
             "ODOM" => self.odom(&rest).map(Some),
+            "RAWLASER1" if self.options.raw_laser == RawLaserScans::Always => {
+                self.rawlaser(&rest).map(Some)
+            }
             _ => Ok(None), // PARAM, NEFF, SYNC, RAWLASER*, ...: not used
         }
     }
@@ -347,8 +428,11 @@ impl<R: BufRead> CarmenReader<R> {
         })
     }
 
-    fn robotlaser(&self, f: &[&str]) -> Result<LogRecord, IoError> {
-        // laser_type start_angle fov angular_res max_range accuracy remission_mode n r1..rn
+    /// The laser header and ranges that `ROBOTLASER1` and `RAWLASER1`
+    /// share (`laser_type start_angle fov angular_res max_range accuracy
+    /// remission_mode n r1..rn m rem1..remm`): the scan, without its stamp,
+    /// and the index of the first field after the remissions.
+    fn laser_fields(&self, f: &[&str]) -> Result<(Scan, usize), IoError> {
         let start = self.num(f, 1, "start_angle")?;
         let res = self.num(f, 3, "angular_res")?;
         let max_range = self.num(f, 4, "max_range")?;
@@ -364,7 +448,37 @@ impl<R: BufRead> CarmenReader<R> {
             .map(|r| if f64::from(r) >= max { f32::INFINITY } else { r })
             .collect();
         let m = self.count(f, 8 + n, "remission count")?;
-        let p = 9 + n + m;
+        let scan = Scan::new(start as f32, res as f32, 0.0, max as f32, ranges);
+        Ok((scan, 9 + n + m))
+    }
+
+    /// `RAWLASER1`: the laser header, ranges and remissions, then
+    /// `ipc_timestamp hostname logger_timestamp`; no pose.
+    fn rawlaser(&self, f: &[&str]) -> Result<LogRecord, IoError> {
+        let (scan, p) = self.laser_fields(f)?;
+        let stamp = self.num(f, p, "ipc_timestamp")? + self.options.time_offset_s;
+        self.exact(
+            f,
+            p + 3,
+            format_args!(
+                "RAWLASER1 with {} ranges and {} remissions: 7 header fields, the counts, \
+                 ipc_timestamp hostname logger_timestamp",
+                scan.len(),
+                p - 9 - scan.len()
+            ),
+        )?;
+        Ok(LogRecord::Scan(ScanRecord {
+            scan: scan.with_stamp(stamp),
+            pose: None,
+            odometry: None,
+            position: self.line_no,
+            sensor: carmen_laser_type(self.num(f, 0, "laser_type")?),
+        }))
+    }
+
+    fn robotlaser(&self, f: &[&str]) -> Result<LogRecord, IoError> {
+        let (scan, p) = self.laser_fields(f)?;
+        let (n, m) = (scan.len(), p - 9 - scan.len());
         let laser = self.pose(f, p, "laser")?;
         let robot = self.pose(f, p + 3, "robot")?;
         let stamp = self.num(f, p + 11, "ipc_timestamp")? + self.options.time_offset_s;
@@ -377,9 +491,8 @@ impl<R: BufRead> CarmenReader<R> {
                  logger_timestamp"
             ),
         )?;
-        let scan = Scan::new(start as f32, res as f32, 0.0, max as f32, ranges).with_stamp(stamp);
         Ok(LogRecord::Scan(ScanRecord {
-            scan,
+            scan: scan.with_stamp(stamp),
             pose: Some(laser),
             odometry: Some(robot),
             position: self.line_no,
@@ -624,5 +737,68 @@ mod tests {
             .remove(0)
             .unwrap_err();
         assert!(e.to_string().contains("expected 9"), "{e}");
+    }
+
+    /// A `RAWLASER1` line of `n` ranges of 2.5 m, two remissions, at 12.5 s.
+    fn rawlaser(n: usize, extra: &str) -> String {
+        let mut l = format!("RAWLASER1 2 -2.0944 4.18879 0.00613592 5.6 0.01 0 {n}");
+        l.push_str(&" 2.5".repeat(n));
+        l.push_str(&format!(" 2 7 7 12.5 host 12.6{extra}\n"));
+        l
+    }
+
+    /// `RAWLASER1` is a scan without a pose when asked for
+    /// ([`RawLaserScans::Always`]), skipped otherwise; a stream cannot be
+    /// looked through, so there `WhenNoPosedScans` skips it.
+    #[test]
+    fn rawlaser_is_a_scan_without_a_pose_when_asked_for() {
+        let text = format!("ODOM 1 2 0.1 0 0 0 3.0 host 3.0\n{}", rawlaser(683, ""));
+        let always = CarmenOptions { raw_laser: RawLaserScans::Always, ..Default::default() };
+        let records = read(&text, always);
+        assert_eq!(records.len(), 2);
+        let LogRecord::Scan(s) = records[1].as_ref().unwrap() else { panic!() };
+        assert_eq!((s.scan.len(), s.scan.stamp_s, s.position), (683, Some(12.5), 2));
+        assert_eq!((s.pose, s.odometry, s.sensor), (None, None, Some(SensorProfile::Urg04lx)));
+        assert!((f64::from(s.scan.angle_min) + 2.0944).abs() < 1e-6);
+        assert!((f64::from(s.scan.range_max) - 5.6).abs() < 1e-6);
+        for skipping in [RawLaserScans::Never, RawLaserScans::WhenNoPosedScans] {
+            let o = CarmenOptions { raw_laser: skipping, ..Default::default() };
+            assert_eq!(read(&text, o).len(), 1, "{skipping:?}");
+        }
+        // The field count is checked: the stamp would be a remission.
+        let e = read(&rawlaser(10, " 9"), always).remove(0).unwrap_err().to_string();
+        assert!(e.starts_with("t.clf:1: 25 fields after the message name, expected 24"), "{e}");
+        let e = read(&rawlaser(10, "").replace(" 2 7 7", " 2 7"), always).remove(0).unwrap_err();
+        assert!(e.to_string().contains("ipc_timestamp"), "{e}");
+    }
+
+    /// Opened from a file, a log reads its `RAWLASER1` lines only when it
+    /// has no `FLASER` or `ROBOTLASER1` line: CARMEN's logger writes the
+    /// front laser as both, and every scan must come once.
+    #[test]
+    fn a_file_reads_rawlaser_only_without_posed_scans() {
+        let mut flaser = String::from("FLASER 180");
+        flaser.push_str(&" 2.5".repeat(180));
+        flaser.push_str(" 1 2 0.5 1 2 0.5 12.5 host 12.6\n");
+        let raw_only = format!("# a laser alone\n{}{}", rawlaser(5, ""), rawlaser(5, ""));
+        let both = format!("{}{}{}", rawlaser(5, ""), flaser, rawlaser(5, ""));
+        for (name, text, scans, posed) in [("raw", raw_only, 2, false), ("both", both, 1, true)] {
+            let path = std::env::temp_dir()
+                .join(format!("pcaline-carmen-{}-{name}.clf", std::process::id()));
+            std::fs::write(&path, &text).unwrap();
+            assert_eq!(has_posed_scans(&path).unwrap(), posed, "{name}");
+            let records: Vec<_> = CarmenReader::open(&path, CarmenOptions::default())
+                .unwrap()
+                .collect::<Result<_, _>>()
+                .unwrap();
+            std::fs::remove_file(&path).unwrap();
+            assert_eq!(records.len(), scans, "{name}");
+            let posed_scans = records
+                .iter()
+                .filter(|r| matches!(r, LogRecord::Scan(s) if s.pose.is_some()))
+                .count();
+            assert_eq!(posed_scans, usize::from(posed), "{name}");
+        }
+        assert!(has_posed_scans(Path::new("/no/such/log.clf")).is_err());
     }
 }

@@ -30,7 +30,7 @@ mod scene_file;
 mod tf_codec;
 
 pub use atomic::{AtomicFile, OutputSet, remove_temporary_files, write_atomic, write_atomic_with};
-pub use carmen::{CarmenOptions, CarmenReader};
+pub use carmen::{CarmenOptions, CarmenReader, RawLaserScans, has_posed_scans};
 pub use error::IoError;
 pub use foxglove_mcap::{
     FRAME_SENSOR, FRAME_WORLD, FoxgloveMcapWriter, PoseKind, Stamp, Topic, TopicCounts,

@@ -12,7 +12,7 @@
 
 use crate::carmen::CarmenReader;
 use crate::log::{LogFormat, LogOptions, check_record_in, read_log};
-use crate::{CarmenOptions, IoError, LogRecord};
+use crate::{CarmenOptions, IoError, LogRecord, RawLaserScans};
 use std::io::BufRead;
 use std::ops::ControlFlow;
 use std::path::Path;
@@ -133,6 +133,9 @@ fn read_carmen_chunks(
     scans_per_chunk: usize,
     mut visit: impl FnMut(LogChunk) -> ControlFlow<()>,
 ) -> Result<(), IoError> {
+    // Decided once for the whole log: each chunk's reader sees only its lines.
+    let options = crate::carmen::resolve_raw_laser(path, options)?;
+    let raw = options.raw_laser == RawLaserScans::Always;
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
     let shared_path: Arc<Path> = path.into();
     let mut input = std::io::BufReader::with_capacity(1 << 16, file);
@@ -154,7 +157,7 @@ fn read_carmen_chunks(
             break;
         }
         g.lines += 1;
-        g.scans += usize::from(is_scan_line(&g.text[start..]));
+        g.scans += usize::from(is_scan_line(&g.text[start..], raw));
         if (g.scans == scans_per_chunk || g.text.len() >= MAX_CHUNK_BYTES)
             && visit(g.take(&shared_path, options)).is_break()
         {
@@ -198,10 +201,14 @@ impl Gathered {
 }
 
 /// Whether a CARMEN line is a scan message: its first field is `FLASER` or
-/// `ROBOTLASER1`, the messages [`CarmenReader`] reads as scans.
-fn is_scan_line(line: &[u8]) -> bool {
-    let mut fields = line.split(u8::is_ascii_whitespace).filter(|f| !f.is_empty());
-    matches!(fields.next(), Some(b"FLASER" | b"ROBOTLASER1"))
+/// `ROBOTLASER1`, or `RAWLASER1` when `raw` ([`RawLaserScans::Always`]),
+/// the messages [`CarmenReader`] reads as scans.
+fn is_scan_line(line: &[u8], raw: bool) -> bool {
+    match crate::carmen::first_field(line) {
+        b"FLASER" | b"ROBOTLASER1" => true,
+        b"RAWLASER1" => raw,
+        _ => false,
+    }
 }
 
 #[cfg(test)]
@@ -315,16 +322,35 @@ mod tests {
         }
     }
 
-    /// A chunk of other messages ends at its byte bound, and only FLASER
-    /// and ROBOTLASER1 lines count as scans.
+    /// Only FLASER and ROBOTLASER1 lines count as scans, and RAWLASER1
+    /// lines when the log is read with them.
     #[test]
     fn scan_lines_are_the_scan_messages() {
-        assert!(is_scan_line(b"FLASER 180 1 2\n"));
-        assert!(is_scan_line(b"  ROBOTLASER1\t0 1\n"));
-        assert!(!is_scan_line(b"FLASERX 180\n"));
-        assert!(!is_scan_line(b"# FLASER 180\n"));
-        assert!(!is_scan_line(b"ODOM 1 2 3\n"));
-        assert!(!is_scan_line(b"\n"));
+        for raw in [false, true] {
+            assert!(is_scan_line(b"FLASER 180 1 2\n", raw));
+            assert!(is_scan_line(b"  ROBOTLASER1\t0 1\n", raw));
+            assert_eq!(is_scan_line(b"RAWLASER1 0 1\n", raw), raw);
+            assert!(!is_scan_line(b"RAWLASER2 0 1\n", raw));
+            assert!(!is_scan_line(b"FLASERX 180\n", raw));
+            assert!(!is_scan_line(b"# FLASER 180\n", raw));
+            assert!(!is_scan_line(b"ODOM 1 2 3\n", raw));
+            assert!(!is_scan_line(b"\n", raw));
+        }
+    }
+
+    /// A log of RAWLASER1 lines alone comes in chunks of its scans, as
+    /// [`read_log`] reads it.
+    #[test]
+    fn rawlaser_logs_come_in_chunks_of_their_scans() {
+        let mut line = String::from("RAWLASER1 0 -1.5708 3.14159 0.0174533 81.9 0.01 0 3");
+        line.push_str(" 1.5 2.5 3.5 0 12.5 host 12.6\n");
+        let text = format!("ODOM 1 2 0.1 0 0 0 3.0 host 3.0\n{}", line.repeat(9));
+        let log = temp("raw.clf", text.as_bytes());
+        let (chunked, error, n_chunks) = records_in_chunks(&log.0, 4);
+        assert_eq!(error, None);
+        assert_eq!(n_chunks, 3);
+        assert_eq!(chunked.iter().filter(|r| r.starts_with("Scan")).count(), 9);
+        assert_eq!((chunked, None), records_in_order(&log.0));
     }
 
     /// The other formats come as parsed records, in chunks of the asked size.
