@@ -240,7 +240,26 @@ fn ros_odometry(
             .into());
         }
         None if tracks.len() == 1 => tracks.keys().next().cloned().unwrap_or_default(),
-        None if tracks.is_empty() => return Ok(LogOdometry::None),
+        None if tracks.is_empty() => {
+            // No Odometry topic: the transform tree may hold it (`/tf`).
+            let sensor = motion.scan_frame.unwrap_or_default();
+            let found = pcaline_io::odometry_from_transforms(
+                &motion.static_transforms,
+                &motion.transforms,
+                &sensor,
+            );
+            return Ok(found.map_or(LogOdometry::None, |o| {
+                let mut poses = o.records;
+                poses.sort_by(|a, b| a.stamp_s.total_cmp(&b.stamp_s));
+                LogOdometry::Track {
+                    topic: format!("/tf ({} -> {})", o.parent, o.child),
+                    poses,
+                    vehicle: o.child,
+                    sensor,
+                    mount: Some(o.vehicle_from_sensor),
+                }
+            }));
+        }
         None => return Ok(LogOdometry::Several(tracks.keys().cloned().collect())),
     };
     let track = tracks.remove(&topic).unwrap_or_default();
@@ -308,7 +327,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             if !quiet && *m != Pose2::identity() {
                 eprintln!(
                     "{log}: the scans' frame {sensor} lies {:.3} m forward, {:.3} m left and \
-                     {:.2}° turned from the odometry's {vehicle} (/tf_static): taken as the \
+                     {:.2}° turned from the odometry's {vehicle} (the transform tree): taken as the \
                      LIDAR's mount (--mount overrides)",
                     m.x(),
                     m.y(),

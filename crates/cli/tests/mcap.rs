@@ -197,25 +197,30 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     odom.push((frames[last].time_s + 1e-3, odometry[last]));
     // With a mount, the odometry is the vehicle's (`base`), the LIDAR
     // (`laser`) sits at the mount, and `/tf_static` says so.
+    // `odom_topics` "/tf": the odometry as `odom -> base` transforms.
     let write = |path: &Path, odom_topics: &[&str], mount: Option<pcaline::Pose2>| {
         let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
         let mut w = mcap::Writer::new(file).unwrap();
         let scan_schema = w.add_schema("sensor_msgs/msg/LaserScan", "ros2msg", b"").unwrap();
         let odom_schema = w.add_schema("nav_msgs/msg/Odometry", "ros2msg", b"").unwrap();
+        let tf_schema = w.add_schema("tf2_msgs/msg/TFMessage", "ros2msg", b"").unwrap();
         let scans = w.add_channel(scan_schema, "/scan", "cdr", &BTreeMap::new()).unwrap();
-        let odoms: Vec<u16> = odom_topics
+        let odoms: Vec<(u16, bool)> = odom_topics
             .iter()
-            .map(|t| w.add_channel(odom_schema, t, "cdr", &BTreeMap::new()).unwrap())
+            .map(|t| {
+                let schema = if *t == "/tf" { tf_schema } else { odom_schema };
+                (w.add_channel(schema, t, "cdr", &BTreeMap::new()).unwrap(), *t == "/tf")
+            })
             .collect();
         let mut messages: Vec<(f64, u16, Vec<u8>)> = Vec::new();
         let sensor_from_vehicle = mount.unwrap_or_default().inverse();
         if let Some(m) = mount {
-            let tf_schema = w.add_schema("tf2_msgs/msg/TFMessage", "ros2msg", b"").unwrap();
             let tf = w.add_channel(tf_schema, "/tf_static", "cdr", &BTreeMap::new()).unwrap();
             let t = pcaline_io::FrameTransform {
                 parent: "base".into(),
                 child: "laser".into(),
                 parent_from_child: m,
+                stamp_s: 0.0,
             };
             messages.push((0.0, tf, pcaline_io::encode_tf_cdr(&[t])));
         }
@@ -224,8 +229,17 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
         }
         for (t, p) in &odom {
             let vehicle = p.compose(&sensor_from_vehicle);
-            for ch in &odoms {
-                let data = pcaline_io::encode_odometry_cdr(*t, &vehicle, "odom", "base");
+            for (ch, tf) in &odoms {
+                let data = if *tf {
+                    pcaline_io::encode_tf_cdr(&[pcaline_io::FrameTransform {
+                        parent: "odom".into(),
+                        child: "base".into(),
+                        parent_from_child: vehicle,
+                        stamp_s: *t,
+                    }])
+                } else {
+                    pcaline_io::encode_odometry_cdr(*t, &vehicle, "odom", "base")
+                };
                 messages.push((*t, *ch, data));
             }
         }
@@ -312,4 +326,17 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     // composed with the mount and back, rounded, moves the estimator's
     // inputs by a few ulps).
     assert!(worst < 1e-3, "the mounted run's LIDAR off the plain run's by {worst} m");
+    // The same odometry kept in the transform tree instead (`/tf`, odom ->
+    // base; no nav_msgs/Odometry, as many ROS bags have it): the same map.
+    let in_tree = tmp("odom-tf.mcap");
+    write(&in_tree, &["/tf"], Some(mount));
+    let out_tree = tmp("odom-tf-map");
+    let o = pcaline(&["map", s(&in_tree), "--out", s(&out_tree)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("odometry from /tf (odom -> base)"), "{err}");
+    assert!(err.contains("0.300 m forward, -0.050 m left and 10.00° turned"), "{err}");
+    assert!(!err.contains("LIDAR-only"), "{err}");
+    let trajectory = |dir: &Path| std::fs::read(dir.join("trajectory.json")).unwrap();
+    assert!(trajectory(&out_tree) == trajectory(&out_offset), "/tf and Odometry differ");
 }

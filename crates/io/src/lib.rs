@@ -28,6 +28,7 @@ mod ros_cursor;
 mod scan_text;
 mod scene_file;
 mod tf_codec;
+mod tf_odometry;
 
 pub use atomic::{AtomicFile, OutputSet, remove_temporary_files, write_atomic, write_atomic_with};
 pub use carmen::{CarmenOptions, CarmenReader, RawLaserScans, has_posed_scans};
@@ -58,3 +59,4 @@ pub use ros::{OdometryTrack, RosMotion, read_mcap, read_ros_motion, read_ros1_ba
 pub use scan_text::{ScanJson, read_scan_csv, read_scan_json, scans_to_csv};
 pub use scene_file::{parse_scene, read_scene, write_scene};
 pub use tf_codec::{FrameTransform, decode_tf_cdr, decode_tf_ros1, encode_tf_cdr};
+pub use tf_odometry::{TfOdometry, odometry_from_transforms};

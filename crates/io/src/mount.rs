@@ -92,6 +92,7 @@ pub fn mount_from_pose_pairs(pairs: &[(Pose2, Pose2)]) -> Option<Pose2> {
 ///     parent: p.into(),
 ///     child: c.into(),
 ///     parent_from_child: Pose2::new(x, 0.0, 0.0),
+///     stamp_s: 0.0,
 /// };
 /// let tree = [t("base_footprint", "base_link", 0.1), t("base_link", "laser", 0.2)];
 /// let m = mount_from_transforms(&tree, "base_footprint", "/laser").unwrap();
@@ -146,6 +147,7 @@ mod tests {
             parent: p.into(),
             child: c.into(),
             parent_from_child: pose,
+            stamp_s: 0.0,
         };
         // odom -> base_link -> plate -> laser, with the laser's frame turned.
         let tree = [

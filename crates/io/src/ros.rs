@@ -352,6 +352,10 @@ pub struct RosMotion {
     pub scan_frame: Option<String>,
     /// Every transform on `/tf_static`.
     pub static_transforms: Vec<crate::FrameTransform>,
+    /// Every transform on `/tf`, in the file's order, each with the number
+    /// of its message: where a log keeps its odometry when it has no
+    /// `nav_msgs/Odometry` ([`crate::odometry_from_transforms`]).
+    pub transforms: Vec<(usize, crate::FrameTransform)>,
 }
 
 /// The messages of one `nav_msgs/Odometry` topic.
@@ -399,13 +403,34 @@ pub fn read_ros_motion(
         track.records.push(record);
         Ok(ControlFlow::Continue(()))
     })?;
-    let tf = Wanted { ros1_type: ROS1_TF, ros2_type: ROS2_TF, topic: Some("/tf_static") };
-    messages(path, tf, &mut |file, _, position, data| {
+    // `/tf_static` and `/tf` in one pass; other TFMessage topics are not
+    // the transform tree.
+    let tf = Wanted { ros1_type: ROS1_TF, ros2_type: ROS2_TF, topic: None };
+    messages(path, tf, &mut |file, topic, position, data| {
+        let dynamic = match topic.trim_start_matches('/') {
+            "tf_static" => false,
+            "tf" => true,
+            _ => return Ok(ControlFlow::Continue(())),
+        };
         let t = if cdr { decode_tf_cdr(data) } else { decode_tf_ros1(data) };
         let t = t.map_err(|e| {
             IoError::parse(file, None, format!("message {position}: TFMessage: {e}"))
         })?;
-        motion.static_transforms.extend(t);
+        for transform in &t {
+            let record = OdometryRecord {
+                pose: transform.parent_from_child,
+                stamp_s: transform.stamp_s,
+                position,
+            };
+            crate::check_record(&LogRecord::Odometry(record)).map_err(|e| {
+                IoError::parse(file, None, format!("message {position}: TFMessage: {e}"))
+            })?;
+        }
+        if dynamic {
+            motion.transforms.extend(t.into_iter().map(|t| (position, t)));
+        } else {
+            motion.static_transforms.extend(t);
+        }
         Ok(ControlFlow::Continue(()))
     })?;
     let scans = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic: scan_topic };
@@ -441,6 +466,7 @@ mod tests {
             parent: "base_link".into(),
             child: "laser".into(),
             parent_from_child: pcaline_geometry::Pose2::new(0.2, 0.0, 0.0),
+            stamp_s: 0.0,
         };
         let tf = ("/tf_static", crate::encode_tf_cdr(std::slice::from_ref(&laser)));
         let messages: Vec<(&str, Vec<u8>)> = std::iter::once(tf)

@@ -19,6 +19,8 @@ pub struct FrameTransform {
     /// The child frame's pose in the parent's: x, y and the rotation's yaw
     /// (z and the tilt dropped).
     pub parent_from_child: Pose2,
+    /// The header's stamp, seconds (0 in a static transform, as a rule).
+    pub stamp_s: f64,
 }
 
 /// A frame name as ROS 1 and ROS 2 write it, compared without its leading `/`.
@@ -36,7 +38,7 @@ fn transforms(c: &mut Cursor<'_>) -> Result<Vec<FrameTransform>, String> {
     }
     let mut out = Vec::with_capacity(n);
     for k in 0..n {
-        let (_stamp, parent) = c.header()?;
+        let (stamp_s, parent) = c.header()?;
         let child = frame_name(&c.string("child_frame_id")?);
         let mut v = [0.0; 7];
         for x in &mut v {
@@ -48,7 +50,8 @@ fn transforms(c: &mut Cursor<'_>) -> Result<Vec<FrameTransform>, String> {
             return Err(format!("transform {k}: the rotation is not a unit quaternion"));
         }
         let yaw = (2.0 * (qw * qz + qx * qy)).atan2(1.0 - 2.0 * (qy * qy + qz * qz));
-        out.push(FrameTransform { parent, child, parent_from_child: Pose2::new(v[0], v[1], yaw) });
+        let parent_from_child = Pose2::new(v[0], v[1], yaw);
+        out.push(FrameTransform { parent, child, parent_from_child, stamp_s });
     }
     Ok(out)
 }
@@ -63,6 +66,7 @@ fn transforms(c: &mut Cursor<'_>) -> Result<Vec<FrameTransform>, String> {
 ///     parent: "base_link".into(),
 ///     child: "laser".into(),
 ///     parent_from_child: Pose2::new(0.2, 0.0, 0.1),
+///     stamp_s: 0.0,
 /// };
 /// let back = decode_tf_cdr(&encode_tf_cdr(&[t.clone()])).unwrap();
 /// assert_eq!(back[0].child, "laser");
@@ -78,7 +82,8 @@ pub fn decode_tf_ros1(data: &[u8]) -> Result<Vec<FrameTransform>, String> {
 }
 
 /// Encodes little-endian CDR `tf2_msgs/msg/TFMessage` of `transforms`
-/// (stamps 0, rotations about z).
+/// (rotations about z; stamps in whole nanoseconds, a negative or
+/// non-finite one as 0).
 pub fn encode_tf_cdr(transforms: &[FrameTransform]) -> Vec<u8> {
     let mut out = vec![0u8, 1, 0, 0];
     let pad = |out: &mut Vec<u8>, n: usize| {
@@ -89,7 +94,11 @@ pub fn encode_tf_cdr(transforms: &[FrameTransform]) -> Vec<u8> {
     out.extend_from_slice(&(transforms.len() as u32).to_le_bytes());
     for t in transforms {
         pad(&mut out, 4);
-        out.extend_from_slice(&[0u8; 8]);
+        let stamp = if t.stamp_s.is_finite() { t.stamp_s.max(0.0) } else { 0.0 };
+        let sec = stamp.floor();
+        let nanosec = (((stamp - sec) * 1e9).round() as u32).min(999_999_999);
+        out.extend_from_slice(&(sec as i32).to_le_bytes());
+        out.extend_from_slice(&nanosec.to_le_bytes());
         for name in [&t.parent, &t.child] {
             pad(&mut out, 4);
             out.extend_from_slice(&(name.len() as u32 + 1).to_le_bytes());
@@ -118,11 +127,13 @@ mod tests {
                 parent: "odom".into(),
                 child: "base".into(),
                 parent_from_child: Pose2::new(1.0, 2.0, -0.5),
+                stamp_s: 1234.5,
             },
             FrameTransform {
                 parent: "/base".into(),
                 child: "laser_frame".into(),
                 parent_from_child: Pose2::new(0.3, -0.1, 3.0),
+                stamp_s: 0.0,
             },
         ];
         let back = decode_tf_cdr(&encode_tf_cdr(&ts)).unwrap();
@@ -130,6 +141,7 @@ mod tests {
         assert_eq!((back[1].parent.as_str(), back[1].child.as_str()), ("base", "laser_frame"));
         assert!((back[1].parent_from_child.heading() - 3.0).abs() < 1e-12);
         assert_eq!(back[0].parent_from_child.x(), 1.0);
+        assert_eq!((back[0].stamp_s, back[1].stamp_s), (1234.5, 0.0));
     }
 
     #[test]
