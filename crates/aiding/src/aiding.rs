@@ -132,6 +132,25 @@ pub struct Aiding {
     pending_step: Option<(Pose2, Matrix3<f64>)>,
     /// The last step's consistent matches (for the window).
     last_consistent: Vec<(LineSegment, MapLine)>,
+    /// Where the estimate stood at the source's last pose, while scans
+    /// come without the source.
+    gap: Option<SourceGap>,
+}
+
+/// The estimate at the source's last pose before scans without it: a
+/// source that resumes in the same frame is composed from here, by its
+/// motion across the gap ([`Aiding::step_without_source`]).
+#[derive(Debug, Clone, Copy)]
+struct SourceGap {
+    /// The source's last pose.
+    source: Pose2,
+    /// The corrected pose and its covariance then.
+    pose: Pose2,
+    covariance: Matrix3<f64>,
+    /// The source's calibration then.
+    calibration: SourceCalibration,
+    /// That scan's stamp, if it had one.
+    stamp_s: Option<f64>,
 }
 
 impl Aiding {
@@ -165,6 +184,7 @@ impl Aiding {
             window: None,
             pending_step: None,
             last_consistent: Vec::new(),
+            gap: None,
         })
     }
 
@@ -190,6 +210,11 @@ impl Aiding {
         let rotation = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
         self.covariance = rotation * self.covariance * rotation.transpose();
         self.calibration.pose_scale_cov = rotation * self.calibration.pose_scale_cov;
+        if let Some(g) = &mut self.gap {
+            g.pose = new_world_from_old.compose(&g.pose);
+            g.covariance = rotation * g.covariance * rotation.transpose();
+            g.calibration.pose_scale_cov = rotation * g.calibration.pose_scale_cov;
+        }
         self.window = None;
     }
 
@@ -256,13 +281,30 @@ impl Aiding {
         }
         let increment = self.last_source.map(|s| s.between(source_pose));
         self.last_source = Some(*source_pose);
+        let gap = self.gap.take();
         match (self.corrected, increment) {
             (Some(_), Some(inc)) => self.step_increment(&inc, lines),
-            // The source resumes after scans without it: its frame is not
-            // the estimate's, and its motion since its last pose overlaps
-            // what the LIDAR-only steps estimated. This scan is predicted
-            // as those were; the next takes the source's increment.
-            (Some(previous), None) => self.step_constant_velocity(previous, lines),
+            // The source resumes after scans without it.
+            (Some(previous), None) => match gap {
+                // It was there before them: its motion across the gap is
+                // composed from the estimate of its last scan, which
+                // replaces what the LIDAR-only scans estimated of it.
+                Some(g) if self.plausible_source_step(&g.source.between(source_pose)) => {
+                    self.corrected = Some(g.pose);
+                    self.covariance = g.covariance;
+                    self.calibration = g.calibration;
+                    self.window = None;
+                    if self.last_dt_s.is_some() {
+                        self.last_dt_s = g.stamp_s.zip(self.last_stamp_s).map(|(a, b)| b - a);
+                    }
+                    self.step_increment(&g.source.between(source_pose), lines)
+                }
+                // It starts after the first scans, or jumped across the gap
+                // (a frame of its own, a reset): its frame is not the
+                // estimate's. This scan is predicted as the LIDAR-only ones
+                // were; the next takes the source's increment.
+                _ => self.step_constant_velocity(previous, lines),
+            },
             (None, _) => {
                 self.process(*source_pose, Matrix3::zeros(), Prediction::Source, None, lines)
             }
@@ -294,19 +336,32 @@ impl Aiding {
     /// the last estimated motion is repeated as the prediction, with
     /// [`crate::EstimatorConfig::constant_velocity`] noise, and the line
     /// matches estimate the motion. `stamp_s`, when given, is checked as in
-    /// [`Aiding::step_at`]. A source given again later resumes from its
-    /// pose then: its first scan is predicted as here, the next ones by its
-    /// increments (its motion across the gap is not counted twice, and its
-    /// frame need not be the estimate's).
+    /// [`Aiding::step_at`]. A source given again later that was given
+    /// before these scans is composed by its motion across them from the
+    /// estimate at its last pose, and the motion the scans without it
+    /// estimated is replaced, not counted twice; when that motion is a jump
+    /// ([`crate::EstimatorConfig::max_source_step_m`], a source reset or in
+    /// another frame), or the source is new, its first scan is predicted as
+    /// here and the next ones by its increments (its frame need not be the
+    /// estimate's).
     pub fn step_without_source(
         &mut self,
         stamp_s: Option<f64>,
         lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
+        let last_stamp_s = self.last_stamp_s;
         if stamp_s.is_some_and(|t| self.stamp_went_backwards(t)) {
             return self.fall_back(Fallback::StampBackwards);
         }
-        self.last_source = None;
+        if let (Some(source), Some(pose)) = (self.last_source.take(), self.corrected) {
+            self.gap = Some(SourceGap {
+                source,
+                pose,
+                covariance: self.covariance,
+                calibration: self.calibration,
+                stamp_s: last_stamp_s,
+            });
+        }
         let Some(previous) = self.corrected else {
             return self.process(
                 Pose2::identity(),
@@ -370,8 +425,7 @@ impl Aiding {
         }
         let previous = self.corrected.unwrap_or_default();
         let e = &self.config.estimator;
-        let jumped = increment.x().hypot(increment.y()) > e.max_source_step_m
-            || increment.heading().abs() > e.max_source_turn_rad;
+        let jumped = !self.plausible_source_step(increment);
         let dt = self.step_dt();
         let (increment, noise, prediction, fallback) = if jumped {
             let motion = self.last_motion.unwrap_or_default();
@@ -402,6 +456,15 @@ impl Aiding {
             self.calibration.propagate_pose_scale(&c, &step_world, !jumped, &mut cov);
         }
         self.process(predicted, cov, prediction, fallback, lines)
+    }
+
+    /// Whether a source's step is motion, not a jump: within
+    /// [`crate::EstimatorConfig::max_source_step_m`] and
+    /// [`crate::EstimatorConfig::max_source_turn_rad`].
+    fn plausible_source_step(&self, increment: &Pose2) -> bool {
+        let e = &self.config.estimator;
+        increment.x().hypot(increment.y()) <= e.max_source_step_m
+            && increment.heading().abs() <= e.max_source_turn_rad
     }
 
     /// The step's duration when both scans were stamped and it is usable.
@@ -1029,7 +1092,8 @@ mod tests {
             let (pose, _) = a.step_without_source(Some(k as f64), none);
             assert!((pose.x() - k as f64).abs() < 1e-9, "scan {k}: {pose:?}");
         }
-        // The source comes back in a frame 10 m away: only its increments count.
+        // The source comes back in a frame 10 m away (a jump across the
+        // gap): only its increments count.
         for k in 5..8 {
             let (pose, _) = a.step_at(k as f64, &Pose2::new(10.0 + k as f64, 0.0, 0.0), none);
             assert!((pose.x() - k as f64).abs() < 1e-9, "scan {k}: {pose:?}");
@@ -1044,6 +1108,42 @@ mod tests {
         let (pose, _) =
             b.step_at(2.0, &Pose2::new(-4.0 + 0.5f64.cos(), 7.0 + 0.5f64.sin(), 0.5), none);
         assert!((pose.x() - 1.0).abs() < 1e-9 && pose.y().abs() < 1e-9, "{pose:?}");
+    }
+
+    /// A source missing on every other scan (odometry messages that do
+    /// not bracket each scan): each scan that has it is placed by its
+    /// motion since its last pose, from the estimate there. Before, each
+    /// was predicted at constant velocity as the scans without it were, so
+    /// the source was never used: here, accelerating along x, the pose fell
+    /// behind it by metres.
+    #[test]
+    fn a_source_on_every_other_scan_is_bridged_across_the_gaps() {
+        let none: &[SensorLine] = &[];
+        let mut a = aiding(AidingConfig::estimator());
+        let x = |k: usize| 0.05 * (k * k) as f64;
+        for k in 0..20 {
+            let t = k as f64;
+            let (pose, report) = if k % 2 == 0 {
+                a.step_at(t, &Pose2::new(x(k), 0.1 * t, 0.02 * t), none)
+            } else {
+                a.step_without_source(Some(t), none)
+            };
+            if k % 2 == 0 {
+                assert_eq!(report.prediction, Prediction::Source, "scan {k}");
+                let d = pose.between(&Pose2::new(x(k), 0.1 * t, 0.02 * t));
+                assert!(d.x().hypot(d.y()) < 1e-9 && d.heading().abs() < 1e-9, "{k}: {pose:?}");
+            }
+        }
+        // A reanchoring in the gap (a pose-graph optimization) moves where
+        // the source resumes from with the estimate.
+        let mut b = aiding(AidingConfig::estimator());
+        b.step_at(0.0, &Pose2::identity(), none);
+        b.step_without_source(Some(1.0), none);
+        let moved = Pose2::new(0.5, -0.2, 0.1);
+        b.reanchor(LineMap::new(MapConfig::default()).unwrap(), &moved);
+        let (pose, _) = b.step_at(2.0, &Pose2::new(1.0, 0.0, 0.0), none);
+        let d = pose.between(&moved.compose(&Pose2::new(1.0, 0.0, 0.0)));
+        assert!(d.x().hypot(d.y()) < 1e-9 && d.heading().abs() < 1e-9, "{pose:?}");
     }
 
     #[test]
