@@ -79,10 +79,18 @@ impl LogFormat {
     }
 
     /// Detects the format from the extension, a bag directory, or the first
-    /// bytes (magic numbers).
+    /// bytes (magic numbers). A directory is a ROS 2 bag: of sqlite3 files
+    /// ([`LogFormat::Ros2Bag`]), or of MCAP files, ROS 2's default storage
+    /// since Iron ([`LogFormat::Mcap`]), when it has `.mcap` files and no
+    /// `.db3` file.
     pub fn detect(path: &Path) -> Result<LogFormat, IoError> {
         if path.is_dir() {
-            return Ok(LogFormat::Ros2Bag);
+            let has = |ext| crate::ros::files_with_extension(path, ext).map(|f| !f.is_empty());
+            return Ok(if !has("db3")? && has("mcap")? {
+                LogFormat::Mcap
+            } else {
+                LogFormat::Ros2Bag
+            });
         }
         let ext =
             path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();

@@ -215,23 +215,39 @@ fn topic_exists(
     }
 }
 
-/// The `.db3` files of a ROS 2 bag: the file itself, or the `.db3` files of
-/// a bag directory in name order.
-fn ros2_files(path: &Path) -> Result<Vec<std::path::PathBuf>, IoError> {
+/// The files of a bag: the file itself, or the files of a bag directory
+/// (ROS 2 writes a directory of `.db3` or `.mcap` files, split by size or
+/// time) with the extension `ext`, in name order.
+fn bag_files(path: &Path, ext: &str) -> Result<Vec<std::path::PathBuf>, IoError> {
     if path.is_dir() {
-        let mut files: Vec<_> = std::fs::read_dir(path)
-            .map_err(|e| IoError::io(path, e))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|x| x == "db3"))
-            .collect();
-        files.sort();
+        let files = files_with_extension(path, ext)?;
         if files.is_empty() {
-            return Err(IoError::parse(path, None, "a ROS 2 bag directory without .db3 files"));
+            return Err(IoError::parse(
+                path,
+                None,
+                format!("a bag directory without .{ext} files"),
+            ));
         }
         Ok(files)
     } else {
         Ok(vec![path.to_path_buf()])
     }
+}
+
+/// The files of the directory `dir` whose extension is `ext`
+/// (case-insensitive), in name order.
+pub(crate) fn files_with_extension(
+    dir: &Path,
+    ext: &str,
+) -> Result<Vec<std::path::PathBuf>, IoError> {
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .map_err(|e| IoError::io(dir, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case(ext)))
+        .collect();
+    files.sort();
+    Ok(files)
 }
 
 /// Streams the LaserScans of a ROS 2 sqlite3 bag (a `.db3` file or a bag
@@ -247,7 +263,7 @@ pub fn read_ros2_bag(
 /// The wanted messages of a ROS 2 bag, file by file in message id order.
 fn ros2_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Result<Pass, IoError> {
     let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
-    for file in ros2_files(path)? {
+    for file in bag_files(path, "db3")? {
         let sql = |e: rusqlite::Error| IoError::parse(&file, None, format!("sqlite: {e}"));
         let db = rusqlite::Connection::open_with_flags(
             &file,
@@ -301,7 +317,8 @@ fn ros2_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Resu
     Ok(pass)
 }
 
-/// Streams the CDR LaserScans of an MCAP file.
+/// Streams the CDR LaserScans of an MCAP file, or of the `.mcap` files of a
+/// ROS 2 bag directory in name order.
 pub fn read_mcap(
     path: &Path,
     topic: Option<&str>,
@@ -312,6 +329,24 @@ pub fn read_mcap(
 
 /// The wanted CDR messages of an MCAP file, in the file's order.
 fn mcap_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Result<Pass, IoError> {
+    let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
+    for file in bag_files(path, "mcap")? {
+        mcap_file_messages(&file, &wanted, visit, &mut pass)?;
+        if pass.stopped {
+            break;
+        }
+    }
+    Ok(pass)
+}
+
+/// [`mcap_messages`] of one MCAP file, adding to `pass`; positions count
+/// the file's own messages.
+fn mcap_file_messages(
+    path: &Path,
+    wanted: &Wanted<'_>,
+    visit: &mut Visit<'_>,
+    pass: &mut Pass,
+) -> Result<(), IoError> {
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
     // No record is longer than the file: a corrupt length must not become an
     // allocation of exabytes.
@@ -319,7 +354,6 @@ fn mcap_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Resu
     let options = mcap::sans_io::LinearReaderOptions::default()
         .with_record_length_limit(usize::try_from(len).unwrap_or(usize::MAX));
     let reader = mcap::io::MessageReader::new_with_options(std::io::BufReader::new(file), options);
-    let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
     for (index, message) in reader.enumerate() {
         let message = message
             .map_err(|e| IoError::parse(path, None, format!("after message {index}: {e}")))?;
@@ -334,10 +368,10 @@ fn mcap_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Resu
         }
         if visit(path, &ch.topic, index + 1, &message.data)?.is_break() {
             pass.stopped = true;
-            return Ok(pass);
+            return Ok(());
         }
     }
-    Ok(pass)
+    Ok(())
 }
 
 /// The odometry of a ROS log and what places its LIDAR on the vehicle
@@ -572,6 +606,32 @@ mod tests {
             .unwrap();
             assert_eq!(scans, 4, "{format:?}");
         }
+        // A ROS 2 bag directory of MCAP files (rosbag2's default storage
+        // since Iron), split in two: detected as MCAP, read file by file.
+        let bag = dir.join("mcap_bag");
+        std::fs::create_dir_all(&bag).unwrap();
+        std::fs::write(bag.join("metadata.yaml"), "rosbag2_bagfile_information: {}\n").unwrap();
+        for name in ["mcap_bag_0.mcap", "mcap_bag_1.MCAP"] {
+            std::fs::copy(&mcap_path, bag.join(name)).unwrap();
+        }
+        assert_eq!(LogFormat::detect(&bag).unwrap(), LogFormat::Mcap);
+        let motion = read_ros_motion(&bag, LogFormat::Mcap, None).unwrap();
+        assert_eq!(motion.odometry["/odom"].records.len(), 8);
+        assert_eq!(motion.static_transforms.len(), 2);
+        let mut stamps = Vec::new();
+        crate::read_log(&bag, &crate::LogOptions::default(), |r| {
+            if let LogRecord::Scan(s) = r {
+                stamps.push(s.position);
+            }
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        assert_eq!(stamps.len(), 8);
+        let empty = dir.join("empty_bag");
+        std::fs::create_dir_all(&empty).unwrap();
+        assert_eq!(LogFormat::detect(&empty).unwrap(), LogFormat::Ros2Bag);
+        let e = read_ros_motion(&empty, LogFormat::Mcap, None).unwrap_err().to_string();
+        assert!(e.contains("without .mcap files"), "{e}");
         // Other formats have no such messages.
         assert_eq!(read_ros_motion(&db_path, LogFormat::Json, None).unwrap(), RosMotion::default());
         // A broken odometry message is an error naming it.
