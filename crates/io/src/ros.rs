@@ -28,10 +28,21 @@ struct Wanted<'a> {
     topic: Option<&'a str>,
 }
 
-/// Called with each wanted message's file (a ROS 2 bag directory's `.db3`
-/// file, else the log), topic, position (a 1-based message number, or a
-/// ROS 2 message id) and data, in the file's order.
-type Visit<'v> = dyn FnMut(&Path, &str, usize, &[u8]) -> Result<ControlFlow<()>, IoError> + 'v;
+/// How a message is serialized.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Encoding {
+    /// ROS 2's CDR (ROS 2 bags, MCAP channels of encoding `cdr`).
+    Cdr,
+    /// ROS 1's (ROS 1 bags, MCAP channels of encoding `ros1`, as MCAP files
+    /// converted from ROS 1 bags have them).
+    Ros1,
+}
+
+/// Called with each wanted message's file (a bag directory's `.db3` or
+/// `.mcap` file, else the log), topic, position (a 1-based message number,
+/// or a ROS 2 message id), encoding and data, in the file's order.
+type Visit<'v> =
+    dyn FnMut(&Path, &str, usize, Encoding, &[u8]) -> Result<ControlFlow<()>, IoError> + 'v;
 
 /// What a pass saw: the topics of the wanted type, and whether the visitor
 /// stopped it.
@@ -55,7 +66,7 @@ pub fn read_ros1_bag(
     topic: Option<&str>,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
-    read_scans(path, topic, visit, ros1_messages, decode_laserscan_ros1, "message")
+    read_scans(path, topic, visit, ros1_messages, "message")
 }
 
 /// A pass over the messages of one type of a ROS log.
@@ -70,13 +81,16 @@ fn read_scans(
     topic: Option<&str>,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
     messages: MessagePass,
-    decode: fn(&[u8]) -> Result<pcaline_geometry::Scan, String>,
     label: &str,
 ) -> Result<usize, IoError> {
     let wanted = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic };
     let mut count = 0;
-    let pass = messages(path, wanted, &mut |file, _, position, data| {
-        let scan = decode(data).map_err(|e| {
+    let pass = messages(path, wanted, &mut |file, _, position, encoding, data| {
+        let scan = match encoding {
+            Encoding::Cdr => decode_laserscan_cdr(data),
+            Encoding::Ros1 => decode_laserscan_ros1(data),
+        };
+        let scan = scan.map_err(|e| {
             IoError::parse(file, None, format!("{label} {position}: LaserScan: {e}"))
         })?;
         count += 1;
@@ -180,7 +194,7 @@ fn read_ros1_checked(
                 rosbag::MessageRecord::MessageData(m) => {
                     index += 1;
                     let Some(Some(topic)) = connections.get(&m.conn_id) else { continue };
-                    if visit(path, topic, index, m.data)?.is_break() {
+                    if visit(path, topic, index, Encoding::Ros1, m.data)?.is_break() {
                         pass.stopped = true;
                         return Ok(pass);
                     }
@@ -257,7 +271,7 @@ pub fn read_ros2_bag(
     topic: Option<&str>,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
-    read_scans(path, topic, visit, ros2_messages, decode_laserscan_cdr, "message id")
+    read_scans(path, topic, visit, ros2_messages, "message id")
 }
 
 /// The wanted messages of a ROS 2 bag, file by file in message id order.
@@ -307,7 +321,7 @@ fn ros2_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Resu
             for (id, topic_id, data) in rows {
                 last = id;
                 let topic = taken.get(&topic_id).map_or("", String::as_str);
-                if visit(&file, topic, id as usize, &data)?.is_break() {
+                if visit(&file, topic, id as usize, Encoding::Cdr, &data)?.is_break() {
                     pass.stopped = true;
                     return Ok(pass);
                 }
@@ -324,7 +338,7 @@ pub fn read_mcap(
     topic: Option<&str>,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
-    read_scans(path, topic, visit, mcap_messages, decode_laserscan_cdr, "message")
+    read_scans(path, topic, visit, mcap_messages, "message")
 }
 
 /// The wanted CDR messages of an MCAP file, in the file's order.
@@ -358,15 +372,21 @@ fn mcap_file_messages(
         let message = message
             .map_err(|e| IoError::parse(path, None, format!("after message {index}: {e}")))?;
         let ch = &message.channel;
-        let of_type = ch.schema.as_ref().is_some_and(|s| s.name == wanted.ros2_type)
-            && ch.message_encoding == "cdr";
+        let schema = ch.schema.as_ref().map_or("", |s| s.name.as_str());
+        let encoding = match ch.message_encoding.as_str() {
+            "cdr" if schema == wanted.ros2_type => Some(Encoding::Cdr),
+            "ros1" if schema == wanted.ros1_type => Some(Encoding::Ros1),
+            _ => None,
+        };
+        let of_type = encoding.is_some();
         if of_type && !pass.topics.contains(&ch.topic) {
             pass.topics.insert(ch.topic.clone());
         }
         if !of_type || wanted.topic.is_some_and(|t| t != ch.topic) {
             continue;
         }
-        if visit(path, &ch.topic, index + 1, &message.data)?.is_break() {
+        let Some(encoding) = encoding else { continue };
+        if visit(path, &ch.topic, index + 1, encoding, &message.data)?.is_break() {
             pass.stopped = true;
             return Ok(());
         }
@@ -416,17 +436,20 @@ pub fn read_ros_motion(
     scan_topic: Option<&str>,
 ) -> Result<RosMotion, IoError> {
     let mut motion = RosMotion::default();
-    let (messages, cdr): (MessagePass, bool) = match format {
-        LogFormat::Ros1Bag => (ros1_messages, false),
-        LogFormat::Ros2Bag => (ros2_messages, true),
-        LogFormat::Mcap => (mcap_messages, true),
+    let messages: MessagePass = match format {
+        LogFormat::Ros1Bag => ros1_messages,
+        LogFormat::Ros2Bag => ros2_messages,
+        LogFormat::Mcap => mcap_messages,
         _ => return Ok(motion),
     };
     let odometry = Wanted { ros1_type: ROS1_ODOMETRY, ros2_type: ROS2_ODOMETRY, topic: None };
-    messages(path, odometry, &mut |file, topic, position, data| {
+    messages(path, odometry, &mut |file, topic, position, encoding, data| {
         let what =
             |e: String| IoError::parse(file, None, format!("message {position}: Odometry: {e}"));
-        let m = if cdr { decode_odometry_cdr(data) } else { decode_odometry_ros1(data) };
+        let m = match encoding {
+            Encoding::Cdr => decode_odometry_cdr(data),
+            Encoding::Ros1 => decode_odometry_ros1(data),
+        };
         let m = m.map_err(what)?;
         let record = OdometryRecord { pose: m.pose, stamp_s: m.stamp_s, position };
         crate::check_record(&LogRecord::Odometry(record)).map_err(what)?;
@@ -440,13 +463,16 @@ pub fn read_ros_motion(
     // `/tf_static` and `/tf` in one pass; other TFMessage topics are not
     // the transform tree.
     let tf = Wanted { ros1_type: ROS1_TF, ros2_type: ROS2_TF, topic: None };
-    messages(path, tf, &mut |file, topic, position, data| {
+    messages(path, tf, &mut |file, topic, position, encoding, data| {
         let dynamic = match topic.trim_start_matches('/') {
             "tf_static" => false,
             "tf" => true,
             _ => return Ok(ControlFlow::Continue(())),
         };
-        let t = if cdr { decode_tf_cdr(data) } else { decode_tf_ros1(data) };
+        let t = match encoding {
+            Encoding::Cdr => decode_tf_cdr(data),
+            Encoding::Ros1 => decode_tf_ros1(data),
+        };
         let t = t.map_err(|e| {
             IoError::parse(file, None, format!("message {position}: TFMessage: {e}"))
         })?;
@@ -468,8 +494,8 @@ pub fn read_ros_motion(
         Ok(ControlFlow::Continue(()))
     })?;
     let scans = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic: scan_topic };
-    messages(path, scans, &mut |file, _, position, data| {
-        let frame = laserscan_frame(data, !cdr);
+    messages(path, scans, &mut |file, _, position, encoding, data| {
+        let frame = laserscan_frame(data, encoding == Encoding::Ros1);
         let frame = frame.map_err(|e| {
             IoError::parse(file, None, format!("message {position}: LaserScan: {e}"))
         })?;
@@ -690,6 +716,87 @@ mod tests {
                 .contains("no LaserScan on topic \"/nope\" (LaserScan topics: /other, /scan)"),
             "{e}"
         );
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    /// A LaserScan in ROS 1's serialization (packed, little-endian).
+    fn laserscan_ros1(scan: &Scan, frame_id: &str) -> Vec<u8> {
+        let mut out = Vec::new();
+        let stamp = scan.stamp_s.unwrap_or(0.0);
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&(stamp.floor() as u32).to_le_bytes());
+        out.extend_from_slice(&((stamp.fract() * 1e9).round() as u32).to_le_bytes());
+        out.extend_from_slice(&(frame_id.len() as u32).to_le_bytes());
+        out.extend_from_slice(frame_id.as_bytes());
+        let last = scan.angle_min + scan.angle_increment * (scan.len() - 1) as f32;
+        for v in [scan.angle_min, last, scan.angle_increment, 0.0, 0.0] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [scan.range_min, scan.range_max] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.extend_from_slice(&(scan.len() as u32).to_le_bytes());
+        for r in &scan.ranges {
+            out.extend_from_slice(&r.to_le_bytes());
+        }
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out
+    }
+
+    /// MCAP files converted from ROS 1 bags keep ROS 1's serialization
+    /// (channels of encoding `ros1`, schemas named as in ROS 1): they read
+    /// as the same scans, and give the scans' frame.
+    #[test]
+    fn mcap_of_ros1_messages_reads_as_cdr() {
+        let path = std::env::temp_dir().join(format!("pcaline-ros1-{}.mcap", std::process::id()));
+        let scans: Vec<Scan> = (0..3)
+            .map(|k| {
+                let ranges = (0..50).map(|i| 1.0 + 0.01 * (i + k) as f32).collect();
+                Scan::new(-1.0, 0.02, 0.1, 30.0, ranges).with_stamp(10.0 + 0.25 * k as f64)
+            })
+            .collect();
+        {
+            let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+            let mut w = mcap::Writer::new(file).unwrap();
+            let ros1 = w.add_schema(ROS1_TYPE, "ros1msg", b"").unwrap();
+            let ch = w.add_channel(ros1, "/scan", "ros1", &BTreeMap::new()).unwrap();
+            // A CDR channel of the ROS 1 name is not a LaserScan channel.
+            let odd = w.add_schema(ROS1_TYPE, "ros2msg", b"").unwrap();
+            let wrong = w.add_channel(odd, "/cdr_named_as_ros1", "cdr", &BTreeMap::new()).unwrap();
+            for (k, scan) in scans.iter().enumerate() {
+                for (channel_id, data) in [
+                    (ch, laserscan_ros1(scan, "/laser")),
+                    (wrong, encode_laserscan_cdr(scan, "laser")),
+                ] {
+                    let header = mcap::records::MessageHeader {
+                        channel_id,
+                        sequence: k as u32,
+                        log_time: k as u64,
+                        publish_time: k as u64,
+                    };
+                    w.write_to_known_channel(&header, &data).unwrap();
+                }
+            }
+            w.finish().unwrap();
+        }
+        let mut got = Vec::new();
+        let n = read_mcap(&path, None, &mut |r| {
+            if let LogRecord::Scan(s) = r {
+                got.push(s.scan);
+            }
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        assert_eq!(n, 3);
+        for (a, b) in got.iter().zip(&scans) {
+            assert_eq!(
+                (a.angle_min, a.angle_increment, &a.ranges),
+                (b.angle_min, b.angle_increment, &b.ranges)
+            );
+            assert!((a.stamp_s.unwrap() - b.stamp_s.unwrap()).abs() < 1e-6);
+        }
+        let motion = read_ros_motion(&path, LogFormat::Mcap, None).unwrap();
+        assert_eq!(motion.scan_frame.as_deref(), Some("laser"));
         std::fs::remove_file(&path).unwrap();
     }
 }
