@@ -162,7 +162,7 @@ enum LogOdometry {
         poses: Vec<pcaline_io::OdometryRecord>,
         vehicle: String,
         sensor: String,
-        mount: Option<Pose2>,
+        mount: Option<pcaline_io::PlanarMount>,
     },
     /// A CARMEN log's `ODOM` poses, sorted by stamp.
     CarmenOdom(Vec<pcaline_io::OdometryRecord>),
@@ -256,7 +256,7 @@ fn ros_odometry(
                     poses,
                     vehicle: o.child,
                     sensor,
-                    mount: Some(o.vehicle_from_sensor),
+                    mount: Some(o.mount),
                 }
             }));
         }
@@ -321,20 +321,26 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     // Where the LIDAR sits: as told, else as the log says (a CARMEN log's
     // two poses, a ROS log's static transforms), else at the vehicle's origin.
     let told = args.mount.or(Some(config.vehicle_from_sensor).filter(|m| *m != Pose2::identity()));
+    // An upside-down LIDAR (the transform tree says so) sees the plane
+    // mirrored: its scans are mirrored before they are used.
+    let mut mirrored = false;
     let mount = match (told, &odometry) {
         (Some(m), _) => m,
         (None, LogOdometry::Track { mount: Some(m), vehicle, sensor, .. }) => {
-            if !quiet && *m != Pose2::identity() {
+            let p = m.vehicle_from_sensor;
+            if !quiet && (p != Pose2::identity() || m.mirrored) {
                 eprintln!(
                     "{log}: the scans' frame {sensor} lies {:.3} m forward, {:.3} m left and \
-                     {:.2}° turned from the odometry's {vehicle} (the transform tree): taken as the \
-                     LIDAR's mount (--mount overrides)",
-                    m.x(),
-                    m.y(),
-                    m.heading().to_degrees()
+                     {:.2}° turned from the odometry's {vehicle}{} (the transform tree): taken as \
+                     the LIDAR's mount (--mount overrides)",
+                    p.x(),
+                    p.y(),
+                    p.heading().to_degrees(),
+                    if m.mirrored { ", upside down (its scans mirrored)" } else { "" }
                 );
             }
-            *m
+            mirrored = m.mirrored;
+            p
         }
         (None, LogOdometry::Track { mount: None, vehicle, sensor, .. }) => {
             if !quiet {
@@ -395,7 +401,10 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     // stays here: its deskew uses the velocity of the step before, which
     // the estimator gives in LIDAR-only mode.
     let no_work = |_: usize, batch: &[ScanRecord]| vec![(); batch.len()];
-    for_each_scan(&args.log, &args.input.options()?, no_work, |s, ()| {
+    for_each_scan(&args.log, &args.input.options()?, no_work, |mut s, ()| {
+        if mirrored {
+            s.scan.mirror();
+        }
         // Deskewed with the velocity of the last step (the source's, or the
         // estimator's without one), when the scan has its beam timing (ROS
         // time_increment).

@@ -198,7 +198,9 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     // With a mount, the odometry is the vehicle's (`base`), the LIDAR
     // (`laser`) sits at the mount, and `/tf_static` says so.
     // `odom_topics` "/tf": the odometry as `odom -> base` transforms.
-    let write = |path: &Path, odom_topics: &[&str], mount: Option<pcaline::Pose2>| {
+    // `upside_down`: the LIDAR rolled by 180° on its mount (its scans
+    // mirrored, and /tf_static saying so).
+    let write = |path: &Path, odom_topics: &[&str], mount: Option<pcaline::Pose2>, upside_down| {
         let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
         let mut w = mcap::Writer::new(file).unwrap();
         let scan_schema = w.add_schema("sensor_msgs/msg/LaserScan", "ros2msg", b"").unwrap();
@@ -221,11 +223,16 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
                 child: "laser".into(),
                 parent_from_child: m,
                 stamp_s: 0.0,
+                upside_down,
             };
             messages.push((0.0, tf, pcaline_io::encode_tf_cdr(&[t])));
         }
         for f in &frames {
-            messages.push((f.time_s, scans, pcaline_io::encode_laserscan_cdr(&f.scan, "laser")));
+            let mut scan = f.scan.clone();
+            if upside_down {
+                scan.mirror();
+            }
+            messages.push((f.time_s, scans, pcaline_io::encode_laserscan_cdr(&scan, "laser")));
         }
         for (t, p) in &odom {
             let vehicle = p.compose(&sensor_from_vehicle);
@@ -236,6 +243,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
                         child: "base".into(),
                         parent_from_child: vehicle,
                         stamp_s: *t,
+                        upside_down: false,
                     }])
                 } else {
                     pcaline_io::encode_odometry_cdr(*t, &vehicle, "odom", "base")
@@ -257,7 +265,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
         w.finish().unwrap();
     };
     let log = tmp("odom.mcap");
-    write(&log, &["/odom"], None);
+    write(&log, &["/odom"], None, false);
     let out = tmp("odom-map");
     let o = pcaline(&["map", s(&log), "--out", s(&out)]);
     let err = String::from_utf8_lossy(&o.stderr);
@@ -291,7 +299,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     );
     // Two Odometry topics and none chosen: none used, and said; chosen: used.
     let two = tmp("odom2.mcap");
-    write(&two, &["/odom", "/wheel_odom"], None);
+    write(&two, &["/odom", "/wheel_odom"], None, false);
     let o = pcaline(&["map", s(&two), "--out", s(&tmp("odom2-map"))]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
@@ -308,7 +316,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     // mount from /tf_static, and the scans placed as before.
     let mount = pcaline::Pose2::new(0.3, -0.05, 10f64.to_radians());
     let offset = tmp("odom-offset.mcap");
-    write(&offset, &["/odom"], Some(mount));
+    write(&offset, &["/odom"], Some(mount), false);
     let out_offset = tmp("odom-offset-map");
     let o = pcaline(&["map", s(&offset), "--out", s(&out_offset)]);
     let err = String::from_utf8_lossy(&o.stderr);
@@ -329,7 +337,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     // The same odometry kept in the transform tree instead (`/tf`, odom ->
     // base; no nav_msgs/Odometry, as many ROS bags have it): the same map.
     let in_tree = tmp("odom-tf.mcap");
-    write(&in_tree, &["/tf"], Some(mount));
+    write(&in_tree, &["/tf"], Some(mount), false);
     let out_tree = tmp("odom-tf-map");
     let o = pcaline(&["map", s(&in_tree), "--out", s(&out_tree)]);
     let err = String::from_utf8_lossy(&o.stderr);
@@ -339,4 +347,17 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     assert!(!err.contains("LIDAR-only"), "{err}");
     let trajectory = |dir: &Path| std::fs::read(dir.join("trajectory.json")).unwrap();
     assert!(trajectory(&out_tree) == trajectory(&out_offset), "/tf and Odometry differ");
+    // The LIDAR mounted upside down, which mirrors its scans, and the
+    // transform tree saying so: the scans are mirrored back, the same map.
+    let flipped = tmp("odom-upside-down.mcap");
+    write(&flipped, &["/odom"], Some(mount), true);
+    let out_flipped = tmp("odom-upside-down-map");
+    let o = pcaline(&["map", s(&flipped), "--out", s(&out_flipped)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("upside down (its scans mirrored)"), "{err}");
+    assert!(
+        trajectory(&out_flipped) == trajectory(&out_offset),
+        "the upside-down LIDAR's map differs"
+    );
 }

@@ -75,6 +75,24 @@ impl Scan {
         self
     }
 
+    /// Mirrors the scan, as seen with the sensor's y axis flipped: every
+    /// bearing negated (`angle_min` and `angle_increment`), the beams, their
+    /// ranges and timing unchanged. A sensor mounted upside down sees the
+    /// plane mirrored; its scans mirrored are those of the sensor the right
+    /// way up, with its x axis where it was. Mirroring twice gives the scan
+    /// back.
+    ///
+    /// ```
+    /// use pcaline_geometry::Scan;
+    /// let mut scan = Scan::new(-1.0, 0.01, 0.1, 30.0, vec![2.0; 200]);
+    /// scan.mirror();
+    /// assert_eq!((scan.angle_min, scan.angle_increment), (1.0, -0.01));
+    /// ```
+    pub fn mirror(&mut self) {
+        self.angle_min = -self.angle_min;
+        self.angle_increment = -self.angle_increment;
+    }
+
     /// Number of beams.
     pub fn len(&self) -> usize {
         self.ranges.len()

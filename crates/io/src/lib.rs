@@ -47,7 +47,7 @@ pub use log::{LogFormat, LogOptions, MAX_COORDINATE_M, check_record, check_scan_
 pub use log_chunks::{LogChunk, read_log_chunks};
 pub use mount::{
     MOUNT_AGREEMENT_M, MOUNT_AGREEMENT_RAD, MOUNT_MAX_M, MOUNT_MIN_PAIRS, MOUNT_TRIVIAL_M,
-    MOUNT_TRIVIAL_RAD, mount_from_pose_pairs, mount_from_transforms,
+    MOUNT_TRIVIAL_RAD, PlanarMount, mount_from_pose_pairs, mount_from_transforms,
 };
 pub use odometry_codec::{
     OdometryMessage, decode_odometry_cdr, decode_odometry_ros1, encode_odometry_cdr,

@@ -78,12 +78,60 @@ pub fn mount_from_pose_pairs(pairs: &[(Pose2, Pose2)]) -> Option<Pose2> {
     (!trivial && offset_m <= MOUNT_MAX_M).then_some(first)
 }
 
-/// The pose of frame `sensor` in frame `vehicle` through the tree of
+/// Where a sensor sits on the vehicle, in the plane: its pose, and whether
+/// its frame is mirrored (a LIDAR mounted upside down sees the plane with
+/// its y axis flipped: its bearings turn the other way).
+///
+/// A point `p` of the sensor's frame lies at `vehicle_from_sensor` applied
+/// to `p`, with `p.y` negated first when `mirrored`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct PlanarMount {
+    /// The sensor's pose on the vehicle; its heading is the sensor's x axis.
+    pub vehicle_from_sensor: Pose2,
+    /// The sensor's frame is mirrored.
+    pub mirrored: bool,
+}
+
+impl PlanarMount {
+    /// A mount of pose `vehicle_from_sensor`, mirrored or not.
+    pub fn new(vehicle_from_sensor: Pose2, mirrored: bool) -> Self {
+        PlanarMount { vehicle_from_sensor, mirrored }
+    }
+
+    /// The mount of `transform`'s child in its parent.
+    pub(crate) fn of(transform: &FrameTransform) -> Self {
+        PlanarMount::new(transform.parent_from_child, transform.upside_down)
+    }
+
+    /// `self` then `other`: `other`'s pose is mirrored into `self`'s frame
+    /// when `self` is mirrored.
+    pub(crate) fn compose(&self, other: &PlanarMount) -> Self {
+        let o = other.vehicle_from_sensor;
+        let o = if self.mirrored { Pose2::new(o.x(), -o.y(), -o.heading()) } else { o };
+        PlanarMount::new(self.vehicle_from_sensor.compose(&o), self.mirrored != other.mirrored)
+    }
+
+    /// The vehicle's mount on the sensor.
+    fn inverse(&self) -> Self {
+        let p = self.vehicle_from_sensor;
+        if !self.mirrored {
+            return PlanarMount::new(p.inverse(), false);
+        }
+        // q = M R(-h) (p - t) = R(h) M p - R(h) M t for a mirror M.
+        let (s, c) = p.heading().sin_cos();
+        let (x, y) = (p.x(), -p.y());
+        PlanarMount::new(Pose2::new(-(c * x - s * y), -(s * x + c * y), p.heading()), true)
+    }
+}
+
+/// The mount of frame `sensor` in frame `vehicle` through the tree of
 /// `transforms` (each child's pose in its parent; a transform may be
 /// walked either way), or `None` when no chain joins them. The same frame
 /// gives the identity. Frame names are compared without a leading `/`.
 /// Of several chains, the one with fewest transforms is taken; a
-/// non-finite result is `None`.
+/// non-finite result is `None`. A transform whose child is upside down
+/// ([`FrameTransform::upside_down`]) mirrors what lies beyond it.
 ///
 /// ```
 /// use pcaline_geometry::Pose2;
@@ -93,33 +141,38 @@ pub fn mount_from_pose_pairs(pairs: &[(Pose2, Pose2)]) -> Option<Pose2> {
 ///     child: c.into(),
 ///     parent_from_child: Pose2::new(x, 0.0, 0.0),
 ///     stamp_s: 0.0,
+///     upside_down: false,
 /// };
 /// let tree = [t("base_footprint", "base_link", 0.1), t("base_link", "laser", 0.2)];
 /// let m = mount_from_transforms(&tree, "base_footprint", "/laser").unwrap();
-/// assert!((m.x() - 0.3).abs() < 1e-12);
+/// assert!((m.vehicle_from_sensor.x() - 0.3).abs() < 1e-12 && !m.mirrored);
 /// assert!(mount_from_transforms(&tree, "laser", "camera").is_none());
 /// ```
 pub fn mount_from_transforms(
     transforms: &[FrameTransform],
     vehicle: &str,
     sensor: &str,
-) -> Option<Pose2> {
+) -> Option<PlanarMount> {
     let (vehicle, sensor) = (vehicle.trim_start_matches('/'), sensor.trim_start_matches('/'));
-    // Breadth-first from the vehicle: each frame reached with its pose in
-    // the vehicle's frame.
-    let mut reached: Vec<(&str, Pose2)> = vec![(vehicle, Pose2::identity())];
+    // Breadth-first from the vehicle: each frame reached with its mount on
+    // the vehicle.
+    let mut reached: Vec<(&str, PlanarMount)> =
+        vec![(vehicle, PlanarMount::new(Pose2::identity(), false))];
     let mut next = 0;
     while next < reached.len() {
         let (frame, vehicle_from_frame) = reached[next];
         next += 1;
         if frame == sensor {
-            return vehicle_from_frame.is_finite().then_some(vehicle_from_frame);
+            return vehicle_from_frame
+                .vehicle_from_sensor
+                .is_finite()
+                .then_some(vehicle_from_frame);
         }
         for t in transforms {
             let step = if t.parent == frame {
-                Some((t.child.as_str(), t.parent_from_child))
+                Some((t.child.as_str(), PlanarMount::of(t)))
             } else if t.child == frame {
-                Some((t.parent.as_str(), t.parent_from_child.inverse()))
+                Some((t.parent.as_str(), PlanarMount::of(t).inverse()))
             } else {
                 None
             };
@@ -148,6 +201,7 @@ mod tests {
             child: c.into(),
             parent_from_child: pose,
             stamp_s: 0.0,
+            upside_down: false,
         };
         // odom -> base_link -> plate -> laser, with the laser's frame turned.
         let tree = [
@@ -155,16 +209,59 @@ mod tests {
             t("base_link", "plate", Pose2::new(0.1, 0.0, 0.5)),
             t("plate", "laser", Pose2::new(0.2, 0.05, -0.5)),
         ];
-        let m = mount_from_transforms(&tree, "base_link", "laser").unwrap();
+        let m = mount_from_transforms(&tree, "base_link", "laser").unwrap().vehicle_from_sensor;
         let want = Pose2::new(0.1, 0.0, 0.5).compose(&Pose2::new(0.2, 0.05, -0.5));
         let d = want.between(&m);
         assert!(d.x().hypot(d.y()) < 1e-12 && d.heading().abs() < 1e-12, "{m:?}");
         // The other way round: the inverse.
-        let back = mount_from_transforms(&tree, "laser", "base_link").unwrap();
+        let back = mount_from_transforms(&tree, "laser", "base_link").unwrap().vehicle_from_sensor;
         let d = m.inverse().between(&back);
         assert!(d.x().hypot(d.y()) < 1e-12, "{back:?}");
-        assert_eq!(mount_from_transforms(&tree, "laser", "laser"), Some(Pose2::identity()));
+        assert_eq!(
+            mount_from_transforms(&tree, "laser", "laser"),
+            Some(PlanarMount::new(Pose2::identity(), false))
+        );
         assert_eq!(mount_from_transforms(&[], "base_link", "laser"), None);
+    }
+
+    /// A point of an upside-down laser's frame, carried to the vehicle by
+    /// the mount found, lands where the 3D rotations put it, on chains with
+    /// the flip at either end, walked either way.
+    #[test]
+    fn an_upside_down_laser_is_a_mirrored_mount() {
+        // The 3D rotation of a transform, applied to a point of the plane.
+        let place = |t: &FrameTransform, p: [f64; 2]| {
+            let (s, c) = t.parent_from_child.heading().sin_cos();
+            let y = if t.upside_down { -p[1] } else { p[1] };
+            let o = &t.parent_from_child;
+            [o.x() + c * p[0] - s * y, o.y() + s * p[0] + c * y]
+        };
+        let apply = |m: &PlanarMount, p: [f64; 2]| {
+            let y = if m.mirrored { -p[1] } else { p[1] };
+            let q = m.vehicle_from_sensor.transform_point(&pcaline_geometry::Point2::new(p[0], y));
+            [q.x, q.y]
+        };
+        let t = |parent: &str, child: &str, pose: Pose2, upside_down: bool| FrameTransform {
+            parent: parent.into(),
+            child: child.into(),
+            parent_from_child: pose,
+            stamp_s: 0.0,
+            upside_down,
+        };
+        let (a, b) = (Pose2::new(0.3, -0.1, 0.4), Pose2::new(0.05, 0.2, -1.1));
+        for flips in [[true, false], [false, true], [true, true]] {
+            let tree = [t("base", "plate", a, flips[0]), t("plate", "laser", b, flips[1])];
+            let m = mount_from_transforms(&tree, "base", "laser").unwrap();
+            assert_eq!(m.mirrored, flips[0] != flips[1], "{flips:?}");
+            let p = [1.5, -0.7];
+            let want = place(&tree[0], place(&tree[1], p));
+            let got = apply(&m, p);
+            assert!((want[0] - got[0]).hypot(want[1] - got[1]) < 1e-12, "{flips:?}");
+            // Walked the other way: the inverse.
+            let back = mount_from_transforms(&tree, "laser", "base").unwrap();
+            let round = apply(&back, got);
+            assert!((round[0] - p[0]).hypot(round[1] - p[1]) < 1e-12, "{flips:?}: {back:?}");
+        }
     }
 
     #[test]

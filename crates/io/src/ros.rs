@@ -527,6 +527,7 @@ mod tests {
             child: "laser".into(),
             parent_from_child: pcaline_geometry::Pose2::new(0.2, 0.0, 0.0),
             stamp_s: 0.0,
+            upside_down: false,
         };
         let tf = ("/tf_static", crate::encode_tf_cdr(std::slice::from_ref(&laser)));
         let messages: Vec<(&str, Vec<u8>)> = std::iter::once(tf)

@@ -21,6 +21,11 @@ pub struct FrameTransform {
     pub parent_from_child: Pose2,
     /// The header's stamp, seconds (0 in a static transform, as a rule).
     pub stamp_s: f64,
+    /// The child's z axis points down in the parent's frame (a LIDAR
+    /// mounted upside down, rolled by 180°): in the plane the child frame
+    /// is mirrored (its y flipped) before `parent_from_child`, whose
+    /// heading is then the child's x axis, places it.
+    pub upside_down: bool,
 }
 
 /// A frame name as ROS 1 and ROS 2 write it, compared without its leading `/`.
@@ -51,7 +56,9 @@ fn transforms(c: &mut Cursor<'_>) -> Result<Vec<FrameTransform>, String> {
         }
         let yaw = (2.0 * (qw * qz + qx * qy)).atan2(1.0 - 2.0 * (qy * qy + qz * qz));
         let parent_from_child = Pose2::new(v[0], v[1], yaw);
-        out.push(FrameTransform { parent, child, parent_from_child, stamp_s });
+        // The rotation's (z, z) entry: the child's z axis along the parent's.
+        let upside_down = 1.0 - 2.0 * (qx * qx + qy * qy) < 0.0;
+        out.push(FrameTransform { parent, child, parent_from_child, stamp_s, upside_down });
     }
     Ok(out)
 }
@@ -67,6 +74,7 @@ fn transforms(c: &mut Cursor<'_>) -> Result<Vec<FrameTransform>, String> {
 ///     child: "laser".into(),
 ///     parent_from_child: Pose2::new(0.2, 0.0, 0.1),
 ///     stamp_s: 0.0,
+///     upside_down: false,
 /// };
 /// let back = decode_tf_cdr(&encode_tf_cdr(&[t.clone()])).unwrap();
 /// assert_eq!(back[0].child, "laser");
@@ -82,8 +90,8 @@ pub fn decode_tf_ros1(data: &[u8]) -> Result<Vec<FrameTransform>, String> {
 }
 
 /// Encodes little-endian CDR `tf2_msgs/msg/TFMessage` of `transforms`
-/// (rotations about z; stamps in whole nanoseconds, a negative or
-/// non-finite one as 0).
+/// (rotations about z, rolled by 180° when upside down; stamps in whole
+/// nanoseconds, a negative or non-finite one as 0).
 pub fn encode_tf_cdr(transforms: &[FrameTransform]) -> Vec<u8> {
     let mut out = vec![0u8, 1, 0, 0];
     let pad = |out: &mut Vec<u8>, n: usize| {
@@ -108,7 +116,9 @@ pub fn encode_tf_cdr(transforms: &[FrameTransform]) -> Vec<u8> {
         pad(&mut out, 8);
         let p = &t.parent_from_child;
         let (s, c) = (0.5 * p.heading()).sin_cos();
-        for v in [p.x(), p.y(), 0.0, 0.0, 0.0, s, c] {
+        // Rz(yaw), or Rz(yaw) Rx(pi) upside down: (x, y, z, w).
+        let q = if t.upside_down { [c, s, 0.0, 0.0] } else { [0.0, 0.0, s, c] };
+        for v in [p.x(), p.y(), 0.0, q[0], q[1], q[2], q[3]] {
             out.extend_from_slice(&v.to_le_bytes());
         }
     }
@@ -128,12 +138,14 @@ mod tests {
                 child: "base".into(),
                 parent_from_child: Pose2::new(1.0, 2.0, -0.5),
                 stamp_s: 1234.5,
+                upside_down: false,
             },
             FrameTransform {
                 parent: "/base".into(),
                 child: "laser_frame".into(),
                 parent_from_child: Pose2::new(0.3, -0.1, 3.0),
                 stamp_s: 0.0,
+                upside_down: false,
             },
         ];
         let back = decode_tf_cdr(&encode_tf_cdr(&ts)).unwrap();

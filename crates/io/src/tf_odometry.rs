@@ -9,7 +9,7 @@
 //! that moves is the odometry: its child is the vehicle, its parent the
 //! odometry's frame. A `map -> odom` correction above it is not used.
 
-use crate::{FrameTransform, OdometryRecord};
+use crate::{FrameTransform, OdometryRecord, PlanarMount};
 use pcaline_geometry::Pose2;
 
 /// The odometry found in a transform tree ([`odometry_from_transforms`]).
@@ -23,9 +23,9 @@ pub struct TfOdometry {
     /// The vehicle's pose in the odometry's frame at each `/tf` message of
     /// the transform, in the file's order; `position` is the message's.
     pub records: Vec<OdometryRecord>,
-    /// The scans' frame on the vehicle (`vehicle_from_sensor`): the
-    /// unchanging transforms from the vehicle down to the scans' frame.
-    pub vehicle_from_sensor: Pose2,
+    /// The scans' frame on the vehicle: the unchanging transforms from the
+    /// vehicle down to the scans' frame.
+    pub mount: PlanarMount,
 }
 
 /// Transforms of one parent and child that differ by less than this, metres
@@ -51,6 +51,7 @@ const UNCHANGING: f64 = 1e-9;
 ///     child: child.into(),
 ///     parent_from_child: pose,
 ///     stamp_s,
+///     upside_down: false,
 /// };
 /// let statics = [t("base_link", "laser", Pose2::new(0.2, 0.0, 0.0), 0.0)];
 /// let moving = [
@@ -60,7 +61,7 @@ const UNCHANGING: f64 = 1e-9;
 /// let found = odometry_from_transforms(&statics, &moving, "laser").unwrap();
 /// assert_eq!((found.parent.as_str(), found.child.as_str()), ("odom", "base_link"));
 /// assert_eq!(found.records.len(), 2);
-/// assert_eq!(found.vehicle_from_sensor, Pose2::new(0.2, 0.0, 0.0));
+/// assert_eq!(found.mount.vehicle_from_sensor, Pose2::new(0.2, 0.0, 0.0));
 /// ```
 pub fn odometry_from_transforms(
     statics: &[FrameTransform],
@@ -70,10 +71,10 @@ pub fn odometry_from_transforms(
     let name = |s: &str| s.trim_start_matches('/').to_string();
     let mut frame = name(sensor);
     // The frame's pose in the frames walked up so far: frame_from_sensor.
-    let mut frame_from_sensor = Pose2::identity();
+    let mut frame_from_sensor = PlanarMount::new(Pose2::identity(), false);
     for _ in 0..=statics.len() + dynamic.len() {
         if let Some(t) = statics.iter().find(|t| name(&t.child) == frame) {
-            frame_from_sensor = t.parent_from_child.compose(&frame_from_sensor);
+            frame_from_sensor = PlanarMount::of(t).compose(&frame_from_sensor);
             frame = name(&t.parent);
             continue;
         }
@@ -88,7 +89,7 @@ pub fn odometry_from_transforms(
             d.x().abs() > UNCHANGING || d.y().abs() > UNCHANGING || d.heading().abs() > UNCHANGING
         });
         if !moves {
-            frame_from_sensor = first.parent_from_child.compose(&frame_from_sensor);
+            frame_from_sensor = PlanarMount::of(first).compose(&frame_from_sensor);
             frame = parent;
             continue;
         }
@@ -100,12 +101,7 @@ pub fn odometry_from_transforms(
                 position: *position,
             })
             .collect();
-        return Some(TfOdometry {
-            parent,
-            child: frame,
-            records,
-            vehicle_from_sensor: frame_from_sensor,
-        });
+        return Some(TfOdometry { parent, child: frame, records, mount: frame_from_sensor });
     }
     None
 }
@@ -120,6 +116,7 @@ mod tests {
             child: child.into(),
             parent_from_child: pose,
             stamp_s,
+            upside_down: false,
         }
     }
 
@@ -148,7 +145,7 @@ mod tests {
         assert_eq!(found.records[1].position, 15);
         assert_eq!(found.records[1].stamp_s, 1.0);
         let want = plate.compose(&mount);
-        let d = found.vehicle_from_sensor.between(&want);
+        let d = found.mount.vehicle_from_sensor.between(&want);
         assert!(d.x().hypot(d.y()) < 1e-12 && d.heading().abs() < 1e-12, "{found:?}");
     }
 
@@ -167,6 +164,7 @@ mod tests {
             (2, t("odom", "laser", Pose2::new(1.0, 0.0, 0.0), 1.0)),
         ];
         let found = odometry_from_transforms(&[], &moving, "laser").unwrap();
-        assert_eq!((found.child.as_str(), found.vehicle_from_sensor), ("laser", Pose2::identity()));
+        let mount = found.mount.vehicle_from_sensor;
+        assert_eq!((found.child.as_str(), mount), ("laser", Pose2::identity()));
     }
 }
