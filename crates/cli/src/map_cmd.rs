@@ -227,6 +227,18 @@ fn ros_odometry(
     chosen: Option<&str>,
 ) -> Result<LogOdometry> {
     let mut motion = pcaline_io::read_ros_motion(log, format, options.topic.as_deref())?;
+    // Scans of several LIDARs, each on its own mount, are not one LIDAR's
+    // motion: one is chosen, or none is guessed.
+    if options.topic.is_none() && motion.scan_topics.len() > 1 {
+        let topics: Vec<&str> = motion.scan_topics.iter().map(String::as_str).collect();
+        return Err(BadInput(format!(
+            "{}: LaserScans on several topics ({}): map takes one LIDAR's scans, give its \
+             topic with --topic",
+            log.display(),
+            topics.join(", ")
+        ))
+        .into());
+    }
     let tracks = &mut motion.odometry;
     let topic = match chosen {
         Some(t) if tracks.contains_key(t) => t.to_string(),

@@ -361,3 +361,46 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
         "the upside-down LIDAR's map differs"
     );
 }
+
+/// Scans on two topics (two LIDARs, each on its own mount) are not one
+/// LIDAR's motion: `map` asks which, naming them, and maps the one given.
+#[test]
+fn map_takes_one_lidars_scans() {
+    let log = tmp("two-lidars.mcap");
+    {
+        let file = std::io::BufWriter::new(std::fs::File::create(&log).unwrap());
+        let mut w = mcap::Writer::new(file).unwrap();
+        let schema = w.add_schema("sensor_msgs/msg/LaserScan", "ros2msg", b"").unwrap();
+        let front = w.add_channel(schema, "/front/scan", "cdr", &BTreeMap::new()).unwrap();
+        let rear = w.add_channel(schema, "/rear/scan", "cdr", &BTreeMap::new()).unwrap();
+        for k in 0..20u32 {
+            let scan = pcaline::Scan::new(-1.5, 0.01, 0.1, 30.0, vec![2.0; 300])
+                .with_stamp(f64::from(k) * 0.1);
+            for (ch, frame) in [(front, "front_laser"), (rear, "rear_laser")] {
+                let t = u64::from(k) * 100_000_000;
+                let header = mcap::records::MessageHeader {
+                    channel_id: ch,
+                    sequence: k,
+                    log_time: t,
+                    publish_time: t,
+                };
+                let data = pcaline_io::encode_laserscan_cdr(&scan, frame);
+                w.write_to_known_channel(&header, &data).unwrap();
+            }
+        }
+        w.finish().unwrap();
+    }
+    let o = pcaline(&["map", s(&log), "--out", s(&tmp("two-lidars-map"))]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("several topics (/front/scan, /rear/scan)") && err.contains("--topic"),
+        "{err}"
+    );
+    let out = tmp("front-map");
+    let o = pcaline(&["map", s(&log), "--topic", "/front/scan", "--out", s(&out)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("trajectory.json")).unwrap()).unwrap();
+    assert_eq!(v.as_array().unwrap().len(), 20);
+}

@@ -19,8 +19,8 @@ const ROS2_ODOMETRY: &str = "nav_msgs/msg/Odometry";
 const ROS1_TF: &str = "tf2_msgs/TFMessage";
 const ROS2_TF: &str = "tf2_msgs/msg/TFMessage";
 
-/// The messages a pass over a ROS log takes: one type (its ROS 1 and ROS 2
-/// names), optionally of one topic.
+/// Messages a pass over a ROS log takes: one type (its ROS 1 and ROS 2
+/// names), optionally of one topic. A pass takes several at once.
 #[derive(Clone, Copy)]
 struct Wanted<'a> {
     ros1_type: &'a str,
@@ -38,17 +38,34 @@ enum Encoding {
     Ros1,
 }
 
-/// Called with each wanted message's file (a bag directory's `.db3` or
-/// `.mcap` file, else the log), topic, position (a 1-based message number,
-/// or a ROS 2 message id), encoding and data, in the file's order.
-type Visit<'v> =
-    dyn FnMut(&Path, &str, usize, Encoding, &[u8]) -> Result<ControlFlow<()>, IoError> + 'v;
+/// A wanted message, as a pass gives it to its visitor.
+struct Message<'m> {
+    /// The file it is in (a bag directory's `.db3` or `.mcap` file, else
+    /// the log).
+    file: &'m Path,
+    topic: &'m str,
+    /// Which of the pass's [`Wanted`] it is (their index).
+    kind: usize,
+    /// A 1-based message number, or a ROS 2 message id.
+    position: usize,
+    encoding: Encoding,
+    data: &'m [u8],
+}
 
-/// What a pass saw: the topics of the wanted type, and whether the visitor
-/// stopped it.
+/// Called with each wanted message, in the file's order.
+type Visit<'v> = dyn FnMut(Message<'_>) -> Result<ControlFlow<()>, IoError> + 'v;
+
+/// What a pass saw: the topics of each wanted type (whatever the topic
+/// asked for), and whether the visitor stopped it.
 struct Pass {
-    topics: BTreeSet<String>,
+    topics: Vec<BTreeSet<String>>,
     stopped: bool,
+}
+
+impl Pass {
+    fn new(wanted: &[Wanted<'_>]) -> Self {
+        Pass { topics: vec![BTreeSet::new(); wanted.len()], stopped: false }
+    }
 }
 
 fn scan_record(scan: pcaline_geometry::Scan, position: usize) -> LogRecord {
@@ -70,7 +87,7 @@ pub fn read_ros1_bag(
 }
 
 /// A pass over the messages of one type of a ROS log.
-type MessagePass = fn(&Path, Wanted<'_>, &mut Visit<'_>) -> Result<Pass, IoError>;
+type MessagePass = fn(&Path, &[Wanted<'_>], &mut Visit<'_>) -> Result<Pass, IoError>;
 
 /// The LaserScans of a pass (`messages`), decoded by `decode`, each decode
 /// error naming its `label` (message number or id). Returns the scans
@@ -85,26 +102,30 @@ fn read_scans(
 ) -> Result<usize, IoError> {
     let wanted = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic };
     let mut count = 0;
-    let pass = messages(path, wanted, &mut |file, _, position, encoding, data| {
-        let scan = match encoding {
-            Encoding::Cdr => decode_laserscan_cdr(data),
-            Encoding::Ros1 => decode_laserscan_ros1(data),
+    let pass = messages(path, &[wanted], &mut |m| {
+        let scan = match m.encoding {
+            Encoding::Cdr => decode_laserscan_cdr(m.data),
+            Encoding::Ros1 => decode_laserscan_ros1(m.data),
         };
         let scan = scan.map_err(|e| {
-            IoError::parse(file, None, format!("{label} {position}: LaserScan: {e}"))
+            IoError::parse(m.file, None, format!("{label} {}: LaserScan: {e}", m.position))
         })?;
         count += 1;
-        Ok(visit(scan_record(scan, position)))
+        Ok(visit(scan_record(scan, m.position)))
     })?;
     if !pass.stopped {
-        topic_exists(path, topic, &pass.topics)?;
+        topic_exists(path, topic, &pass.topics[0])?;
     }
     Ok(count)
 }
 
 /// The wanted messages of a ROS 1 bag, in chunk order (see
 /// [`read_ros1_bag`] for the checks).
-fn ros1_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Result<Pass, IoError> {
+fn ros1_messages(
+    path: &Path,
+    wanted: &[Wanted<'_>],
+    visit: &mut Visit<'_>,
+) -> Result<Pass, IoError> {
     check_ros1_header(path)?;
     let run = std::panic::AssertUnwindSafe(|| read_ros1_checked(path, wanted, visit));
     std::panic::catch_unwind(run).unwrap_or_else(|_| {
@@ -149,7 +170,7 @@ fn check_ros1_header(path: &Path) -> Result<(), IoError> {
 
 fn read_ros1_checked(
     path: &Path,
-    wanted: Wanted<'_>,
+    wanted: &[Wanted<'_>],
     visit: &mut Visit<'_>,
 ) -> Result<Pass, IoError> {
     let bag = rosbag::RosBag::new(path).map_err(|e| IoError::io(path, e))?;
@@ -168,9 +189,9 @@ fn read_ros1_checked(
         return Err(bad("no chunk in the index (an unindexed or truncated bag)".into()));
     }
     positions.sort_unstable();
-    // Each connection's topic, when it is of the wanted type and topic.
-    let mut connections: HashMap<u32, Option<String>> = HashMap::new();
-    let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
+    // Each connection's topic and kind, when it is of a wanted type and topic.
+    let mut connections: HashMap<u32, Option<(String, usize)>> = HashMap::new();
+    let mut pass = Pass::new(wanted);
     let mut index = 0usize;
     for (k, pos) in positions.iter().enumerate() {
         let mut records = bag.chunk_records();
@@ -184,17 +205,25 @@ fn read_ros1_checked(
             let msg = msg.map_err(|e| bad(format!("after message {index}: {e}")))?;
             match msg {
                 rosbag::MessageRecord::Connection(c) => {
-                    let of_type = c.tp == wanted.ros1_type;
-                    if of_type {
-                        pass.topics.insert(c.topic.to_string());
+                    let kind = wanted.iter().position(|w| w.ros1_type == c.tp);
+                    if let Some(k) = kind {
+                        pass.topics[k].insert(c.topic.to_string());
                     }
-                    let taken = of_type && wanted.topic.is_none_or(|t| t == c.topic);
-                    connections.insert(c.id, taken.then(|| c.topic.to_string()));
+                    let taken = kind.filter(|k| wanted[*k].topic.is_none_or(|t| t == c.topic));
+                    connections.insert(c.id, taken.map(|k| (c.topic.to_string(), k)));
                 }
                 rosbag::MessageRecord::MessageData(m) => {
                     index += 1;
-                    let Some(Some(topic)) = connections.get(&m.conn_id) else { continue };
-                    if visit(path, topic, index, Encoding::Ros1, m.data)?.is_break() {
+                    let Some(Some((topic, kind))) = connections.get(&m.conn_id) else { continue };
+                    let message = Message {
+                        file: path,
+                        topic,
+                        kind: *kind,
+                        position: index,
+                        encoding: Encoding::Ros1,
+                        data: m.data,
+                    };
+                    if visit(message)?.is_break() {
                         pass.stopped = true;
                         return Ok(pass);
                     }
@@ -275,8 +304,12 @@ pub fn read_ros2_bag(
 }
 
 /// The wanted messages of a ROS 2 bag, file by file in message id order.
-fn ros2_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Result<Pass, IoError> {
-    let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
+fn ros2_messages(
+    path: &Path,
+    wanted: &[Wanted<'_>],
+    visit: &mut Visit<'_>,
+) -> Result<Pass, IoError> {
+    let mut pass = Pass::new(wanted);
     for file in bag_files(path, "db3")? {
         let sql = |e: rusqlite::Error| IoError::parse(&file, None, format!("sqlite: {e}"));
         let db = rusqlite::Connection::open_with_flags(
@@ -285,19 +318,23 @@ fn ros2_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Resu
         )
         .map_err(sql)?;
         let mut topics = db.prepare("SELECT id, name, type FROM topics").map_err(sql)?;
-        let of_type: Vec<(i64, String)> = topics
+        let of_type: Vec<(i64, String, usize)> = topics
             .query_map([], |r| {
                 Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?, r.get::<_, String>(2)?))
             })
             .map_err(sql)?
             .filter_map(Result::ok)
-            .filter(|(_, _, ty)| ty == wanted.ros2_type)
-            .map(|(id, name, _)| (id, name))
+            .filter_map(|(id, name, ty)| {
+                wanted.iter().position(|w| w.ros2_type == ty).map(|k| (id, name, k))
+            })
             .collect();
-        pass.topics.extend(of_type.iter().map(|(_, name)| name.clone()));
-        let taken: HashMap<i64, String> = of_type
+        for (_, name, k) in &of_type {
+            pass.topics[*k].insert(name.clone());
+        }
+        let taken: HashMap<i64, (String, usize)> = of_type
             .into_iter()
-            .filter(|(_, name)| wanted.topic.is_none_or(|t| t == name))
+            .filter(|(_, name, k)| wanted[*k].topic.is_none_or(|t| t == name))
+            .map(|(id, name, k)| (id, (name, k)))
             .collect();
         if taken.is_empty() {
             continue;
@@ -320,8 +357,16 @@ fn ros2_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Resu
             }
             for (id, topic_id, data) in rows {
                 last = id;
-                let topic = taken.get(&topic_id).map_or("", String::as_str);
-                if visit(&file, topic, id as usize, Encoding::Cdr, &data)?.is_break() {
+                let Some((topic, kind)) = taken.get(&topic_id) else { continue };
+                let message = Message {
+                    file: &file,
+                    topic,
+                    kind: *kind,
+                    position: id as usize,
+                    encoding: Encoding::Cdr,
+                    data: &data,
+                };
+                if visit(message)?.is_break() {
                     pass.stopped = true;
                     return Ok(pass);
                 }
@@ -342,10 +387,14 @@ pub fn read_mcap(
 }
 
 /// The wanted CDR messages of an MCAP file, in the file's order.
-fn mcap_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Result<Pass, IoError> {
-    let mut pass = Pass { topics: BTreeSet::new(), stopped: false };
+fn mcap_messages(
+    path: &Path,
+    wanted: &[Wanted<'_>],
+    visit: &mut Visit<'_>,
+) -> Result<Pass, IoError> {
+    let mut pass = Pass::new(wanted);
     for file in bag_files(path, "mcap")? {
-        mcap_file_messages(&file, &wanted, visit, &mut pass)?;
+        mcap_file_messages(&file, wanted, visit, &mut pass)?;
         if pass.stopped {
             break;
         }
@@ -357,7 +406,7 @@ fn mcap_messages(path: &Path, wanted: Wanted<'_>, visit: &mut Visit<'_>) -> Resu
 /// the file's own messages.
 fn mcap_file_messages(
     path: &Path,
-    wanted: &Wanted<'_>,
+    wanted: &[Wanted<'_>],
     visit: &mut Visit<'_>,
     pass: &mut Pass,
 ) -> Result<(), IoError> {
@@ -373,20 +422,28 @@ fn mcap_file_messages(
             .map_err(|e| IoError::parse(path, None, format!("after message {index}: {e}")))?;
         let ch = &message.channel;
         let schema = ch.schema.as_ref().map_or("", |s| s.name.as_str());
-        let encoding = match ch.message_encoding.as_str() {
-            "cdr" if schema == wanted.ros2_type => Some(Encoding::Cdr),
-            "ros1" if schema == wanted.ros1_type => Some(Encoding::Ros1),
-            _ => None,
-        };
-        let of_type = encoding.is_some();
-        if of_type && !pass.topics.contains(&ch.topic) {
-            pass.topics.insert(ch.topic.clone());
+        let of_type =
+            wanted.iter().enumerate().find_map(|(k, w)| match ch.message_encoding.as_str() {
+                "cdr" if schema == w.ros2_type => Some((k, Encoding::Cdr)),
+                "ros1" if schema == w.ros1_type => Some((k, Encoding::Ros1)),
+                _ => None,
+            });
+        let Some((kind, encoding)) = of_type else { continue };
+        if !pass.topics[kind].contains(&ch.topic) {
+            pass.topics[kind].insert(ch.topic.clone());
         }
-        if !of_type || wanted.topic.is_some_and(|t| t != ch.topic) {
+        if wanted[kind].topic.is_some_and(|t| t != ch.topic) {
             continue;
         }
-        let Some(encoding) = encoding else { continue };
-        if visit(path, &ch.topic, index + 1, encoding, &message.data)?.is_break() {
+        let message = Message {
+            file: path,
+            topic: &ch.topic,
+            kind,
+            position: index + 1,
+            encoding,
+            data: &message.data,
+        };
+        if visit(message)?.is_break() {
             pass.stopped = true;
             return Ok(());
         }
@@ -406,6 +463,8 @@ pub struct RosMotion {
     pub scan_frame: Option<String>,
     /// Every transform on `/tf_static`.
     pub static_transforms: Vec<crate::FrameTransform>,
+    /// Every LaserScan topic of the log (whatever topic was asked for).
+    pub scan_topics: BTreeSet<String>,
     /// Every transform on `/tf`, in the file's order, each with the number
     /// of its message: where a log keeps its odometry when it has no
     /// `nav_msgs/Odometry` ([`crate::odometry_from_transforms`]).
@@ -424,10 +483,11 @@ pub struct OdometryTrack {
 }
 
 /// The `nav_msgs/Odometry` of a ROS log (ROS 1 bag, ROS 2 bag or MCAP) by
-/// topic, the frame of its LaserScans (of `scan_topic` when given) and its
-/// `/tf_static` transforms: what `pcaline map` needs to use the odometry
-/// as the source and place the LIDAR on the vehicle. Another format, or a
-/// log without them, gives them empty. Errors name the file and the
+/// topic, the frame of its LaserScans (of `scan_topic` when given), its
+/// LaserScan topics, and its `/tf_static` and `/tf` transforms, in one pass
+/// over the log: what `pcaline map` needs to use the odometry as the source
+/// and place the LIDAR on the vehicle. Another format, or a log without
+/// them, gives them empty. Errors name the file and the
 /// message; a pose or stamp that is not finite, or beyond
 /// [`crate::MAX_COORDINATE_M`], is an error as in every reader.
 pub fn read_ros_motion(
@@ -442,66 +502,72 @@ pub fn read_ros_motion(
         LogFormat::Mcap => mcap_messages,
         _ => return Ok(motion),
     };
-    let odometry = Wanted { ros1_type: ROS1_ODOMETRY, ros2_type: ROS2_ODOMETRY, topic: None };
-    messages(path, odometry, &mut |file, topic, position, encoding, data| {
-        let what =
-            |e: String| IoError::parse(file, None, format!("message {position}: Odometry: {e}"));
-        let m = match encoding {
-            Encoding::Cdr => decode_odometry_cdr(data),
-            Encoding::Ros1 => decode_odometry_ros1(data),
+    // One pass: the odometry, the transforms (of `/tf_static` and `/tf`;
+    // other TFMessage topics are not the transform tree), and the scans,
+    // of which only the first is decoded, for its frame.
+    const ODOMETRY: usize = 0;
+    const TRANSFORMS: usize = 1;
+    let wanted = [
+        Wanted { ros1_type: ROS1_ODOMETRY, ros2_type: ROS2_ODOMETRY, topic: None },
+        Wanted { ros1_type: ROS1_TF, ros2_type: ROS2_TF, topic: None },
+        Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic: scan_topic },
+    ];
+    let pass = messages(path, &wanted, &mut |m| {
+        let position = m.position;
+        let error = |what: &str, e: String| {
+            IoError::parse(m.file, None, format!("message {position}: {what}: {e}"))
         };
-        let m = m.map_err(what)?;
-        let record = OdometryRecord { pose: m.pose, stamp_s: m.stamp_s, position };
-        crate::check_record(&LogRecord::Odometry(record)).map_err(what)?;
-        let track = motion.odometry.entry(topic.to_string()).or_insert_with(|| OdometryTrack {
-            child_frame_id: m.child_frame_id,
-            records: Vec::new(),
-        });
-        track.records.push(record);
+        match m.kind {
+            ODOMETRY => {
+                let decoded = match m.encoding {
+                    Encoding::Cdr => decode_odometry_cdr(m.data),
+                    Encoding::Ros1 => decode_odometry_ros1(m.data),
+                };
+                let o = decoded.map_err(|e| error("Odometry", e))?;
+                let record = OdometryRecord { pose: o.pose, stamp_s: o.stamp_s, position };
+                crate::check_record(&LogRecord::Odometry(record))
+                    .map_err(|e| error("Odometry", e))?;
+                let track = motion.odometry.entry(m.topic.to_string()).or_insert_with(|| {
+                    OdometryTrack { child_frame_id: o.child_frame_id, records: Vec::new() }
+                });
+                track.records.push(record);
+            }
+            TRANSFORMS => {
+                let dynamic = match m.topic.trim_start_matches('/') {
+                    "tf_static" => false,
+                    "tf" => true,
+                    _ => return Ok(ControlFlow::Continue(())),
+                };
+                let decoded = match m.encoding {
+                    Encoding::Cdr => decode_tf_cdr(m.data),
+                    Encoding::Ros1 => decode_tf_ros1(m.data),
+                };
+                let t = decoded.map_err(|e| error("TFMessage", e))?;
+                for transform in &t {
+                    let record = OdometryRecord {
+                        pose: transform.parent_from_child,
+                        stamp_s: transform.stamp_s,
+                        position,
+                    };
+                    crate::check_record(&LogRecord::Odometry(record))
+                        .map_err(|e| error("TFMessage", e))?;
+                }
+                if dynamic {
+                    motion.transforms.extend(t.into_iter().map(|t| (position, t)));
+                } else {
+                    motion.static_transforms.extend(t);
+                }
+            }
+            _ if motion.scan_frame.is_none() => {
+                let frame = laserscan_frame(m.data, m.encoding == Encoding::Ros1)
+                    .map_err(|e| error("LaserScan", e))?;
+                motion.scan_frame = Some(frame);
+            }
+            _ => {}
+        }
         Ok(ControlFlow::Continue(()))
     })?;
-    // `/tf_static` and `/tf` in one pass; other TFMessage topics are not
-    // the transform tree.
-    let tf = Wanted { ros1_type: ROS1_TF, ros2_type: ROS2_TF, topic: None };
-    messages(path, tf, &mut |file, topic, position, encoding, data| {
-        let dynamic = match topic.trim_start_matches('/') {
-            "tf_static" => false,
-            "tf" => true,
-            _ => return Ok(ControlFlow::Continue(())),
-        };
-        let t = match encoding {
-            Encoding::Cdr => decode_tf_cdr(data),
-            Encoding::Ros1 => decode_tf_ros1(data),
-        };
-        let t = t.map_err(|e| {
-            IoError::parse(file, None, format!("message {position}: TFMessage: {e}"))
-        })?;
-        for transform in &t {
-            let record = OdometryRecord {
-                pose: transform.parent_from_child,
-                stamp_s: transform.stamp_s,
-                position,
-            };
-            crate::check_record(&LogRecord::Odometry(record)).map_err(|e| {
-                IoError::parse(file, None, format!("message {position}: TFMessage: {e}"))
-            })?;
-        }
-        if dynamic {
-            motion.transforms.extend(t.into_iter().map(|t| (position, t)));
-        } else {
-            motion.static_transforms.extend(t);
-        }
-        Ok(ControlFlow::Continue(()))
-    })?;
-    let scans = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic: scan_topic };
-    messages(path, scans, &mut |file, _, position, encoding, data| {
-        let frame = laserscan_frame(data, encoding == Encoding::Ros1);
-        let frame = frame.map_err(|e| {
-            IoError::parse(file, None, format!("message {position}: LaserScan: {e}"))
-        })?;
-        motion.scan_frame = Some(frame);
-        Ok(ControlFlow::Break(()))
-    })?;
+    motion.scan_topics = pass.topics[2].clone();
     Ok(motion)
 }
 
@@ -612,6 +678,7 @@ mod tests {
             assert_eq!(tracks.keys().collect::<Vec<_>>(), ["/odom", "/wheel"], "{format:?}");
             assert_eq!(motion.scan_frame.as_deref(), Some("laser"));
             assert_eq!(motion.static_transforms, std::slice::from_ref(&laser));
+            assert_eq!(motion.scan_topics.iter().collect::<Vec<_>>(), ["/scan"]);
             for (topic, first, vehicle) in [("/odom", 0, "base_link"), ("/wheel", 10, "base")] {
                 let t = &tracks[topic];
                 assert_eq!(t.child_frame_id, vehicle);
@@ -710,6 +777,8 @@ mod tests {
         assert_eq!(got, scans);
         let all = read_mcap(&path, None, &mut |_| ControlFlow::Continue(())).unwrap();
         assert_eq!(all, 10);
+        let motion = read_ros_motion(&path, LogFormat::Mcap, Some("/scan")).unwrap();
+        assert_eq!(motion.scan_topics.iter().collect::<Vec<_>>(), ["/other", "/scan"]);
         // A topic no LaserScan channel has: an error listing those that exist.
         let e = read_mcap(&path, Some("/nope"), &mut |_| ControlFlow::Continue(())).unwrap_err();
         assert!(
