@@ -385,6 +385,57 @@ fn map_takes_a_laser_alone_and_its_odom_lines_from_a_carmen_log() {
 }
 
 #[test]
+fn map_takes_the_odometry_of_json_and_csv_scans() {
+    // A user's own log as JSON Lines or CSV, each scan with its odometry
+    // pose: Intel written both ways maps byte for byte as the CARMEN log.
+    let Some(path) = data("intel/intel.gfs.log") else { return };
+    let text = std::fs::read_to_string(&path).unwrap();
+    let (mut json, mut csv) = (
+        String::new(),
+        String::from(
+            "stamp_s,angle_min,angle_increment,range_min,range_max,odom_x,odom_y,odom_heading\n",
+        ),
+    );
+    for line in text.lines() {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        if f.first() != Some(&"FLASER") {
+            continue;
+        }
+        let n: usize = f[1].parse().unwrap();
+        let (ranges, odom, stamp) = (&f[2..2 + n], &f[5 + n..8 + n], f[8 + n]);
+        // The angles FLASER's 180 beams imply; ranges at the maximum and
+        // beyond 80 m are no return in both.
+        let (min, inc) = (-std::f64::consts::FRAC_PI_2, std::f64::consts::PI / 180.0);
+        json.push_str(&format!(
+            "{{\"angle_min\":{min},\"angle_increment\":{inc},\"range_min\":0,\"range_max\":80,\
+             \"ranges\":[{}],\"stamp_s\":{stamp},\"odometry\":[{}]}}\n",
+            ranges.join(","),
+            odom.join(",")
+        ));
+        csv.push_str(&format!(
+            "{stamp},{min},{inc},0,80,{},{}\n",
+            odom.join(","),
+            ranges.join(",")
+        ));
+    }
+    let plain = tmp("odom-text-carmen");
+    assert!(pcaline(&["map", s(&path), "--out", s(&plain)]).status.success());
+    let read = |dir: &Path, name: &str| std::fs::read(dir.join(name)).unwrap();
+    for (name, content) in [("intel.jsonl", json), ("intel.csv", csv)] {
+        let log = tmp(name);
+        std::fs::write(&log, content).unwrap();
+        let dir = tmp(&format!("odom-text-{name}"));
+        let out = pcaline(&["map", s(&log), "--out", s(&dir)]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{name}: {err}");
+        assert!(!err.contains("LIDAR-only"), "{name}: {err}");
+        for file in ["trajectory.json", "map.json"] {
+            assert!(read(&plain, file) == read(&dir, file), "{name}: {file} differs");
+        }
+    }
+}
+
+#[test]
 fn reproduce_small() {
     let out = pcaline(&["--quiet", "reproduce", "table2", "--runs", "200", "--json"]);
     assert!(out.status.success());

@@ -3,18 +3,21 @@
 //! JSON: one scan object, an array of them, or one object per line (JSON
 //! Lines). A scan object is either pcaline's form
 //! `{"angle_min", "angle_increment", "range_min", "range_max", "ranges",
-//! "intensities"?, "stamp_s"?}` (radians, metres; `null` or a missing value
-//! in `ranges` is no return), or the form of the laser_line_extraction
+//! "intensities"?, "stamp_s"?, "odometry"?}` (radians, metres; `null` or a
+//! missing value in `ranges` is no return; `odometry` the vehicle's pose
+//! `[x_m, y_m, heading_rad]`), or the form of the laser_line_extraction
 //! examples, `{"ranges": [...], "bearings": [...]}` with evenly spaced
 //! bearings (then `range_min` is 0 and `range_max` unbounded).
 //!
 //! CSV: a header line, then one scan per line:
 //! `stamp_s,angle_min,angle_increment,range_min,range_max,r0,r1,...`
 //! (empty, `nan` or `inf` cells are no return; lines may have different
-//! beam counts).
+//! beam counts). With `odom_x,odom_y,odom_heading` after `range_max` in the
+//! header, each line carries the vehicle's odometry pose there (metres,
+//! radians), before its ranges.
 
 use crate::{IoError, LogRecord, ScanRecord};
-use pcaline_geometry::Scan;
+use pcaline_geometry::{Pose2, Scan};
 use serde::{Deserialize, Serialize};
 use std::io::BufRead;
 use std::ops::ControlFlow;
@@ -40,6 +43,10 @@ pub struct ScanJson {
     /// Time, seconds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stamp_s: Option<f64>,
+    /// The vehicle's odometry pose when the scan was taken, `[x_m, y_m,
+    /// heading_rad]`: the source `pcaline map` takes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub odometry: Option<[f64; 3]>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -138,11 +145,13 @@ impl From<&Scan> for ScanJson {
             ranges: s.ranges.iter().map(|r| r.is_finite().then_some(*r)).collect(),
             intensities: s.intensities.clone(),
             stamp_s: s.stamp_s,
+            odometry: None,
         }
     }
 }
 
-fn to_scan(any: AnyScan) -> Result<Scan, String> {
+/// The scan of a JSON object, and its odometry pose if it has one.
+fn to_scan(any: AnyScan) -> Result<(Scan, Option<Pose2>), String> {
     let ranges =
         |v: Vec<Option<f32>>| v.into_iter().map(|r| r.unwrap_or(f32::INFINITY)).collect::<Vec<_>>();
     match any {
@@ -161,7 +170,7 @@ fn to_scan(any: AnyScan) -> Result<Scan, String> {
             );
             scan.intensities = j.intensities;
             scan.stamp_s = j.stamp_s;
-            Ok(scan)
+            Ok((scan, j.odometry.map(|[x, y, heading]| Pose2::new(x, y, heading))))
         }
         AnyScan::Bearings(b) => {
             let n = b.ranges.len();
@@ -180,7 +189,9 @@ fn to_scan(any: AnyScan) -> Result<Scan, String> {
                     return Err(format!("bearing {k} is not evenly spaced"));
                 }
             }
-            Ok(Scan::new(b.bearings[0] as f32, inc as f32, 0.0, f32::INFINITY, ranges(b.ranges)))
+            let scan =
+                Scan::new(b.bearings[0] as f32, inc as f32, 0.0, f32::INFINITY, ranges(b.ranges));
+            Ok((scan, None))
         }
     }
 }
@@ -209,15 +220,9 @@ pub fn read_scan_json(
         }
     };
     let mut count = 0;
-    let mut emit = |scan: Scan, position: usize| {
+    let mut emit = |(scan, odometry): (Scan, Option<Pose2>), position: usize| {
         count += 1;
-        visit(LogRecord::Scan(ScanRecord {
-            scan,
-            pose: None,
-            odometry: None,
-            position,
-            sensor: None,
-        }))
+        visit(LogRecord::Scan(ScanRecord { scan, pose: None, odometry, position, sensor: None }))
     };
     let parse_err = |e: serde_json::Error| IoError::parse(path, Some(e.line()), e.to_string());
     match first {
@@ -265,6 +270,8 @@ pub fn read_scan_csv(
 ) -> Result<usize, IoError> {
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
     let mut count = 0;
+    // The first range's column: 8 when the header has the odometry's three.
+    let mut first_range = 5;
     for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
         let line_no = i + 1;
         let line =
@@ -274,8 +281,13 @@ pub fn read_scan_csv(
                 return Err(IoError::parse(
                     path,
                     Some(1),
-                    "expected the header stamp_s,angle_min,angle_increment,range_min,range_max,r0,...",
+                    "expected the header stamp_s,angle_min,angle_increment,range_min,range_max,r0,... \
+                     (or ...,range_max,odom_x,odom_y,odom_heading,r0,...)",
                 ));
+            }
+            let header: Vec<&str> = line.split(',').map(str::trim).collect();
+            if header.get(5..8) == Some(&["odom_x", "odom_y", "odom_heading"][..]) {
+                first_range = 8;
             }
             continue;
         }
@@ -283,11 +295,11 @@ pub fn read_scan_csv(
             continue;
         }
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        if cells.len() < 5 {
+        if cells.len() < first_range {
             return Err(IoError::parse(
                 path,
                 Some(line_no),
-                format!("{} columns, need at least 5", cells.len()),
+                format!("{} columns, need at least {first_range}", cells.len()),
             ));
         }
         let num = |k: usize, name: &str| -> Result<f64, IoError> {
@@ -306,7 +318,12 @@ pub fn read_scan_csv(
             num(3, "range_min")?,
             num(4, "range_max")?,
         );
-        let ranges = cells[5..]
+        let odometry = if first_range == 8 {
+            Some(Pose2::new(num(5, "odom_x")?, num(6, "odom_y")?, num(7, "odom_heading")?))
+        } else {
+            None
+        };
+        let ranges = cells[first_range..]
             .iter()
             .enumerate()
             .map(|(k, c)| {
@@ -325,7 +342,7 @@ pub fn read_scan_csv(
         if visit(LogRecord::Scan(ScanRecord {
             scan,
             pose: None,
-            odometry: None,
+            odometry,
             position: line_no,
             sensor: None,
         }))
@@ -403,6 +420,10 @@ mod tests {
             ("3", "expected a scan object, found a number"),
             ("{}", "missing field"),
             (r#"{"ranges": [1.0, 2.0], "bearings": [0.0, "x"]}"#, "bearings[1]: invalid type"),
+            (
+                r#"{"angle_min": -0.5, "angle_increment": 0.01, "range_min": 0.1, "range_max": 30.0, "ranges": [1.0], "odometry": [1.0, 2.0]}"#,
+                "odometry: invalid length 2",
+            ),
         ];
         for (k, (bad, wanted)) in cases.iter().enumerate() {
             let e = first_error(&format!("bad{k}.jsonl"), &format!("{good}\n{good}\n{bad}\n"));
@@ -410,5 +431,46 @@ mod tests {
             let e = first_error(&format!("bad{k}.json"), &format!("[{good}, {bad}]"));
             assert!(e.contains("scan 2: ") && e.contains(wanted), "{bad}: {e}");
         }
+    }
+
+    /// Every record of a CSV text, or the first error.
+    fn read_csv(name: &str, text: &str) -> Result<Vec<ScanRecord>, String> {
+        let path = std::env::temp_dir().join(format!("pcaline-{}-{name}", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        let mut records = Vec::new();
+        let result = read_scan_csv(&path, &mut |r| {
+            if let LogRecord::Scan(s) = r {
+                records.push(s);
+            }
+            ControlFlow::Continue(())
+        });
+        std::fs::remove_file(&path).unwrap();
+        result.map(|_| records).map_err(|e| e.to_string())
+    }
+
+    /// With the odometry's three columns in the header, each line's pose
+    /// comes before its ranges; a cell that is not a number is named.
+    #[test]
+    fn csv_scans_may_carry_their_odometry() {
+        let header =
+            "stamp_s,angle_min,angle_increment,range_min,range_max,odom_x,odom_y,odom_heading";
+        let records =
+            read_csv("odom.csv", &format!("{header}\n1.5,-0.5,0.01,0.1,30,2,3,0.25,1.0,,2.5\n"))
+                .unwrap();
+        let s = &records[0];
+        assert_eq!(s.odometry, Some(Pose2::new(2.0, 3.0, 0.25)));
+        assert_eq!(s.scan.ranges, [1.0, f32::INFINITY, 2.5]);
+        assert_eq!(s.scan.stamp_s, Some(1.5));
+        let plain = read_csv(
+            "plain.csv",
+            "stamp_s,angle_min,angle_increment,range_min,range_max\n1,-0.5,0.01,0.1,30,2,3\n",
+        )
+        .unwrap();
+        assert_eq!((plain[0].odometry, plain[0].scan.len()), (None, 2));
+        let e = read_csv("bad-odom.csv", &format!("{header}\n1,-0.5,0.01,0.1,30,2,y,0,1\n"))
+            .unwrap_err();
+        assert!(e.contains(":2: odom_y is not a number"), "{e}");
+        let e = read_csv("short.csv", &format!("{header}\n1,-0.5,0.01,0.1,30,2\n")).unwrap_err();
+        assert!(e.contains("6 columns, need at least 8"), "{e}");
     }
 }
