@@ -68,8 +68,11 @@ pub fn odometry_from_transforms(
     dynamic: &[(usize, FrameTransform)],
     sensor: &str,
 ) -> Option<TfOdometry> {
-    let name = |s: &str| s.trim_start_matches('/').to_string();
-    let mut frame = name(sensor);
+    // Names compared without their leading `/`, and without copying them.
+    fn name(s: &str) -> &str {
+        s.trim_start_matches('/')
+    }
+    let mut frame: &str = name(sensor);
     // The frame's pose in the frames walked up so far: frame_from_sensor.
     let mut frame_from_sensor = PlanarMount::new(Pose2::identity(), false);
     for _ in 0..=statics.len() + dynamic.len() {
@@ -101,7 +104,12 @@ pub fn odometry_from_transforms(
                 position: *position,
             })
             .collect();
-        return Some(TfOdometry { parent, child: frame, records, mount: frame_from_sensor });
+        return Some(TfOdometry {
+            parent: parent.to_string(),
+            child: frame.to_string(),
+            records,
+            mount: frame_from_sensor,
+        });
     }
     None
 }
