@@ -78,10 +78,12 @@ pub struct MapArgs {
     mount: Option<Pose2>,
     /// The `nav_msgs/Odometry` topic to use as the source (ROS 1, ROS 2 and
     /// MCAP logs). Default: the log's only Odometry topic; with several,
-    /// none is guessed (LIDAR-only mode, and stderr lists them). Each scan
-    /// takes the pose interpolated at its stamp from the messages either
-    /// side, within 1 s. The LIDAR's mount comes from `/tf_static` (the
-    /// chain from the odometry's child frame to the scans' frame) unless
+    /// none is guessed (LIDAR-only mode, and stderr lists them); with none,
+    /// the first moving transform of `/tf` above the scans' frame (`odom ->
+    /// base_link`). Each scan takes the pose interpolated at its stamp from
+    /// the messages either side, within 1 s. The LIDAR's mount comes from
+    /// the transform tree (the chain from the odometry's child frame to the
+    /// scans' frame; an upside-down LIDAR's scans are mirrored) unless
     /// `--mount` or the configuration gives it.
     #[arg(long, value_name = "TOPIC")]
     odom_topic: Option<String>,
@@ -215,11 +217,13 @@ fn log_odometry(
     }
 }
 
-/// The `nav_msgs/Odometry` of a ROS 1, ROS 2 or MCAP log: the topic
-/// `chosen`, else the only one, with the mount from its child frame to the
-/// scans' frame through `/tf_static` (the identity when they are one
-/// frame). A chosen topic the log does not have is an error listing those
-/// it has.
+/// The odometry of a ROS 1, ROS 2 or MCAP log: the `nav_msgs/Odometry`
+/// topic `chosen`, else the only one, with the mount from its child frame
+/// to the scans' frame through `/tf_static` (the identity when they are one
+/// frame); without any, the odometry the transform tree holds (`/tf`,
+/// [`pcaline_io::odometry_from_transforms`]). A chosen topic the log does
+/// not have, or LaserScans on several topics when no `--topic` chose one,
+/// is an error listing those it has.
 fn ros_odometry(
     log: &std::path::Path,
     format: pcaline_io::LogFormat,
