@@ -183,8 +183,8 @@ impl LogOdometry {
 }
 
 /// The odometry of `log` that comes apart from its scans: see
-/// [`LogOdometry`]. For a ROS log, [`ros_odometry`]; for a CARMEN log
-/// without posed scans, its `ODOM` lines.
+/// [`LogOdometry`]. For a ROS log, [`ros_odometry`]; for a CARMEN log whose
+/// scans are its `RAWLASER1` lines (`options` decided so), its `ODOM` lines.
 fn log_odometry(
     log: &std::path::Path,
     options: &pcaline_io::LogOptions,
@@ -195,7 +195,9 @@ fn log_odometry(
         None => pcaline_io::LogFormat::detect(log)?,
     };
     match format {
-        pcaline_io::LogFormat::Carmen if !pcaline_io::has_posed_scans(log)? => {
+        pcaline_io::LogFormat::Carmen
+            if options.carmen.raw_laser == pcaline_io::RawLaserScans::Always =>
+        {
             let mut poses = Vec::new();
             pcaline_io::read_log(log, options, |record| {
                 if let pcaline_io::LogRecord::Odometry(o) = record {
@@ -331,7 +333,14 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
     let sensor = args.input.sensor(&args.log, config.sensor)?;
-    let options = args.input.options()?;
+    let mut options = args.input.options()?;
+    // Whether a CARMEN log's scans are its RAWLASER1 lines, decided once for
+    // every read below.
+    if options.format.map_or_else(|| pcaline_io::LogFormat::detect(&args.log), Ok)?
+        == pcaline_io::LogFormat::Carmen
+    {
+        options.carmen = options.carmen.decided_for(&args.log)?;
+    }
     let odometry = log_odometry(&args.log, &options, args.odom_topic.as_deref())?;
     let log = args.log.display();
     // Where the LIDAR sits: as told, else as the log says (a CARMEN log's
@@ -417,7 +426,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     // stays here: its deskew uses the velocity of the step before, which
     // the estimator gives in LIDAR-only mode.
     let no_work = |_: usize, batch: &[ScanRecord]| vec![(); batch.len()];
-    for_each_scan(&args.log, &args.input.options()?, no_work, |mut s, ()| {
+    for_each_scan(&args.log, &options, no_work, |mut s, ()| {
         if mirrored {
             s.scan.mirror();
         }

@@ -175,6 +175,14 @@ fn a_log_of_over_a_million_scans_streams_in_constant_memory() {
     std::fs::remove_file(&file).unwrap();
 }
 
+/// `pcaline map LOG --out OUT`, which must succeed; its stderr.
+fn map_log(log: &Path, out: &Path) -> String {
+    let o = pcaline(&["map", s(log), "--out", s(out)]);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    err
+}
+
 /// A ROS log with `nav_msgs/Odometry` beside its scans: `map` takes the
 /// odometry, interpolated at each scan's stamp, as the source (it ran
 /// LIDAR-only before, whatever the log held), picks no topic when there are
@@ -318,9 +326,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     let offset = tmp("odom-offset.mcap");
     write(&offset, &["/odom"], Some(mount), false);
     let out_offset = tmp("odom-offset-map");
-    let o = pcaline(&["map", s(&offset), "--out", s(&out_offset)]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
+    let err = map_log(&offset, &out_offset);
     assert!(err.contains("0.300 m forward, -0.050 m left and 10.00° turned"), "{err}");
     let v: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out_offset.join("trajectory.json")).unwrap())
@@ -339,9 +345,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     let in_tree = tmp("odom-tf.mcap");
     write(&in_tree, &["/tf"], Some(mount), false);
     let out_tree = tmp("odom-tf-map");
-    let o = pcaline(&["map", s(&in_tree), "--out", s(&out_tree)]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
+    let err = map_log(&in_tree, &out_tree);
     assert!(err.contains("odometry from /tf (odom -> base)"), "{err}");
     assert!(err.contains("0.300 m forward, -0.050 m left and 10.00° turned"), "{err}");
     assert!(!err.contains("LIDAR-only"), "{err}");
@@ -352,9 +356,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     let flipped = tmp("odom-upside-down.mcap");
     write(&flipped, &["/odom"], Some(mount), true);
     let out_flipped = tmp("odom-upside-down-map");
-    let o = pcaline(&["map", s(&flipped), "--out", s(&out_flipped)]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
+    let err = map_log(&flipped, &out_flipped);
     assert!(err.contains("upside down (its scans mirrored)"), "{err}");
     assert!(
         trajectory(&out_flipped) == trajectory(&out_offset),

@@ -45,6 +45,21 @@ impl Default for CarmenOptions {
     }
 }
 
+impl CarmenOptions {
+    /// The options with [`RawLaserScans::WhenNoPosedScans`] decided for the
+    /// log at `path`: [`RawLaserScans::Always`] when it has no posed scan
+    /// message ([`has_posed_scans`], which reads up to the first one), else
+    /// [`RawLaserScans::Never`]. Decided once, the log's later reads do not
+    /// look through it again. Other choices are kept as they are.
+    pub fn decided_for(mut self, path: &Path) -> Result<Self, IoError> {
+        if self.raw_laser == RawLaserScans::WhenNoPosedScans {
+            self.raw_laser =
+                if has_posed_scans(path)? { RawLaserScans::Never } else { RawLaserScans::Always };
+        }
+        Ok(self)
+    }
+}
+
 /// Whether the `RAWLASER1` lines of a CARMEN log are read as scans.
 ///
 /// CARMEN's logger writes the front laser twice when the robot module runs:
@@ -223,17 +238,12 @@ impl CarmenReader<std::io::BufReader<std::fs::File>> {
 }
 
 /// `options` with [`RawLaserScans::WhenNoPosedScans`] decided for the log
-/// at `path`: [`RawLaserScans::Always`] when it has no posed scan message,
-/// else [`RawLaserScans::Never`].
+/// at `path` ([`CarmenOptions::decided_for`]).
 pub(crate) fn resolve_raw_laser(
     path: &Path,
-    mut options: CarmenOptions,
+    options: CarmenOptions,
 ) -> Result<CarmenOptions, IoError> {
-    if options.raw_laser == RawLaserScans::WhenNoPosedScans {
-        options.raw_laser =
-            if has_posed_scans(path)? { RawLaserScans::Never } else { RawLaserScans::Always };
-    }
-    Ok(options)
+    options.decided_for(path)
 }
 
 impl<R: BufRead> CarmenReader<R> {

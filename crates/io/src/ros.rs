@@ -507,12 +507,13 @@ pub fn read_ros_motion(
     // of which only the first is decoded, for its frame.
     const ODOMETRY: usize = 0;
     const TRANSFORMS: usize = 1;
+    const SCANS: usize = 2;
     let wanted = [
         Wanted { ros1_type: ROS1_ODOMETRY, ros2_type: ROS2_ODOMETRY, topic: None },
         Wanted { ros1_type: ROS1_TF, ros2_type: ROS2_TF, topic: None },
         Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic: scan_topic },
     ];
-    let pass = messages(path, &wanted, &mut |m| {
+    let mut pass = messages(path, &wanted, &mut |m| {
         let position = m.position;
         let error = |what: &str, e: String| {
             IoError::parse(m.file, None, format!("message {position}: {what}: {e}"))
@@ -558,7 +559,7 @@ pub fn read_ros_motion(
                     motion.static_transforms.extend(t);
                 }
             }
-            _ if motion.scan_frame.is_none() => {
+            SCANS if motion.scan_frame.is_none() => {
                 let frame = laserscan_frame(m.data, m.encoding == Encoding::Ros1)
                     .map_err(|e| error("LaserScan", e))?;
                 motion.scan_frame = Some(frame);
@@ -567,7 +568,7 @@ pub fn read_ros_motion(
         }
         Ok(ControlFlow::Continue(()))
     })?;
-    motion.scan_topics = pass.topics[2].clone();
+    motion.scan_topics = std::mem::take(&mut pass.topics[SCANS]);
     Ok(motion)
 }
 
