@@ -376,6 +376,30 @@ fn map_takes_a_laser_alone_and_its_odom_lines_from_a_carmen_log() {
             assert!(read(&plain, file) == read(&dir, file), "{name}: {file} differs");
         }
     }
+    // The front laser's PARAM lines are its mount, as --mount gives it.
+    let raw = intel_as_rawlaser(&text, true);
+    let (told, from_params) = (tmp("rawlaser-told"), tmp("rawlaser-params"));
+    let log = tmp("intel-raw.log");
+    std::fs::write(&log, &raw).unwrap();
+    let out = pcaline(&["map", s(&log), "--mount", "0.2,-0.05,3", "--out", s(&told)]);
+    assert!(out.status.success());
+    let log = tmp("intel-raw-params.log");
+    std::fs::write(
+        &log,
+        format!(
+            "PARAM robot_frontlaser_offset 0.2 host 0\nPARAM robot_frontlaser_side_offset -0.05 \
+             host 0\nPARAM robot_frontlaser_angular_offset {} host 0\n{raw}",
+            3f64.to_radians()
+        ),
+    )
+    .unwrap();
+    let out = pcaline(&["map", s(&log), "--out", s(&from_params)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("0.200 m forward, -0.050 m left and 3.00° turned"), "{err}");
+    for file in ["trajectory.json", "map.json"] {
+        assert!(read(&told, file) == read(&from_params, file), "PARAM: {file} differs");
+    }
     let log = tmp("intel-raw-alone.log");
     std::fs::write(&log, intel_as_rawlaser(&text, false)).unwrap();
     let out = pcaline(&["map", s(&log), "--no-loop-closure", "--out", s(&tmp("rawlaser-alone"))]);

@@ -1,6 +1,8 @@
 //! CARMEN logs (`.clf`, `.log`): `FLASER`, `ROBOTLASER1`, `ODOM`, and
-//! `RAWLASER1` in a log without the first two ([`RawLaserScans`]); `PARAM`,
-//! `NEFF`, `SYNC` and other messages are skipped; `#` starts a comment.
+//! `RAWLASER1` in a log without the first two ([`RawLaserScans`]); `PARAM`
+//! lines are read apart, for the front laser's mount
+//! ([`front_laser_params`]); `NEFF`, `SYNC` and other messages are skipped;
+//! `#` starts a comment.
 //! Streams line by line: a long log is never held in memory.
 //!
 //! `FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp`:
@@ -102,6 +104,67 @@ pub fn has_posed_scans(path: &Path) -> Result<bool, IoError> {
             return Ok(true);
         }
     }
+}
+
+/// The front laser's mount on the robot that the `PARAM` lines of the CARMEN
+/// log at `path` give: `robot_frontlaser_offset` (forward, metres),
+/// `robot_frontlaser_side_offset` (left, metres) and
+/// `robot_frontlaser_angular_offset` (radians), as CARMEN's robot module
+/// and GMapping read them. A parameter written twice takes its last value;
+/// one that is absent is 0. `None` when the log sets none of the three.
+///
+/// `FLASER` and `ROBOTLASER1` lines carry the laser's pose and the robot's,
+/// which give the mount scan by scan; this is for logs whose scans carry no
+/// pose (`RAWLASER1` with `ODOM` lines). Reads the whole file.
+///
+/// # Errors
+///
+/// The file cannot be read, or one of the three has a value that is not a
+/// finite number (the error names the line and the parameter).
+///
+/// ```
+/// use pcaline_io::front_laser_params;
+/// let path = std::env::temp_dir().join("pcaline-doc-front-laser-params.log");
+/// std::fs::write(&path, "PARAM robot_frontlaser_offset 0.25 host 0\nODOM 0 0 0 0 0 0 1 host 1\n").unwrap();
+/// let mount = front_laser_params(&path).unwrap().unwrap();
+/// assert_eq!((mount.x(), mount.y(), mount.heading()), (0.25, 0.0, 0.0));
+/// std::fs::remove_file(&path).unwrap();
+/// ```
+pub fn front_laser_params(path: &Path) -> Result<Option<Pose2>, IoError> {
+    const NAMES: [&str; 3] = [
+        "robot_frontlaser_offset",
+        "robot_frontlaser_side_offset",
+        "robot_frontlaser_angular_offset",
+    ];
+    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    let mut input = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut line = Vec::new();
+    let mut values: [Option<f64>; 3] = [None; 3];
+    let mut line_no = 0;
+    loop {
+        line.clear();
+        if input.read_until(b'\n', &mut line).map_err(|e| IoError::io(path, e))? == 0 {
+            break;
+        }
+        line_no += 1;
+        if first_field(&line) != b"PARAM" {
+            continue;
+        }
+        // Lines that are not UTF-8 text are the reader's to report.
+        let Ok(text) = std::str::from_utf8(&line) else { continue };
+        let mut fields = text.split_ascii_whitespace().skip(1);
+        let Some(k) = fields.next().and_then(|name| NAMES.iter().position(|n| *n == name)) else {
+            continue;
+        };
+        let value = fields.next().and_then(|v| v.parse::<f64>().ok()).filter(|v| v.is_finite());
+        values[k] = Some(value.ok_or_else(|| {
+            IoError::parse(path, Some(line_no), format!("PARAM {}: not a finite number", NAMES[k]))
+        })?);
+    }
+    Ok(values.iter().any(Option::is_some).then(|| {
+        let [x, y, yaw] = values.map(|v| v.unwrap_or(0.0));
+        Pose2::new(x, y, yaw)
+    }))
 }
 
 /// The first whitespace-separated field of a line (empty for a blank line).
@@ -810,5 +873,37 @@ mod tests {
             assert_eq!(posed_scans, usize::from(posed), "{name}");
         }
         assert!(has_posed_scans(Path::new("/no/such/log.clf")).is_err());
+    }
+
+    /// The front laser's `PARAM` lines make its mount: the last value of
+    /// each wins, an absent one is 0, other parameters and messages are
+    /// passed over, and a value that is no number is an error naming the
+    /// line and the parameter.
+    #[test]
+    fn param_lines_give_the_front_lasers_mount() {
+        let write = |name: &str, text: &str| {
+            let path = std::env::temp_dir()
+                .join(format!("pcaline-carmen-param-{}-{name}.log", std::process::id()));
+            std::fs::write(&path, text).unwrap();
+            path
+        };
+        let text = format!(
+            "PARAM robot_frontlaser_offset 0.1 host 0\n\
+             PARAM robot_rearlaser_offset -0.3 host 0\n{}\
+             PARAM robot_frontlaser_angular_offset 0.05 host 0\n\
+             PARAM robot_frontlaser_offset 0.2 host 0\n",
+            rawlaser(5, "")
+        );
+        let path = write("set", &text);
+        let mount = front_laser_params(&path).unwrap().unwrap();
+        assert_eq!((mount.x(), mount.y(), mount.heading()), (0.2, 0.0, 0.05));
+        let none = write("none", "PARAM robot_rearlaser_offset -0.3 host 0\n");
+        assert_eq!(front_laser_params(&none).unwrap(), None);
+        let bad = write("bad", "# params\nPARAM robot_frontlaser_side_offset nan host 0\n");
+        let e = front_laser_params(&bad).unwrap_err().to_string();
+        assert!(e.contains(":2:") && e.contains("robot_frontlaser_side_offset"), "{e}");
+        for p in [path, none, bad] {
+            std::fs::remove_file(p).unwrap();
+        }
     }
 }

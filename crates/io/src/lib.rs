@@ -31,7 +31,7 @@ mod tf_codec;
 mod tf_odometry;
 
 pub use atomic::{AtomicFile, OutputSet, remove_temporary_files, write_atomic, write_atomic_with};
-pub use carmen::{CarmenOptions, CarmenReader, RawLaserScans, has_posed_scans};
+pub use carmen::{CarmenOptions, CarmenReader, RawLaserScans, front_laser_params, has_posed_scans};
 pub use error::IoError;
 pub use foxglove_mcap::{
     FRAME_SENSOR, FRAME_WORLD, FoxgloveMcapWriter, PoseKind, Stamp, Topic, TopicCounts,
