@@ -123,6 +123,10 @@ struct PoseOut {
     matches: usize,
 }
 
+/// A LIDAR tilted by more than this out of the vehicle's plane is warned
+/// of, radians (1°: ranges 0.015% long, 1.7 cm of height at 1 m).
+const TILT_WARNING_RAD: f64 = 0.017_453;
+
 /// Scans read to find a log's mount.
 const MOUNT_SCANS: usize = 200;
 
@@ -346,6 +350,20 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     // Where the LIDAR sits: as told, else as the log says (a CARMEN log's
     // two poses, a ROS log's static transforms), else at the vehicle's origin.
     let told = args.mount.or(Some(config.vehicle_from_sensor).filter(|m| *m != Pose2::identity()));
+    // A LIDAR the transform tree tilts out of the vehicle's plane (other
+    // than upside down) still has its scans projected as level: said.
+    if let LogOdometry::Track { mount: Some(m), vehicle, sensor, .. } = &odometry
+        && m.tilt_rad() > TILT_WARNING_RAD
+        && !quiet
+    {
+        eprintln!(
+            "{log}: warning: the transform tree tilts the scans' frame {sensor} {:.1}° out of \
+             the plane of {vehicle}: its scans are taken as level, so the returns of beams \
+             along the tilt land up to {:.1}% too far",
+            m.tilt_rad().to_degrees(),
+            100.0 * (1.0 / m.tilt_rad().cos() - 1.0)
+        );
+    }
     // An upside-down LIDAR (the transform tree says so) sees the plane
     // mirrored: its scans are mirrored before they are used.
     let mut mirrored = false;

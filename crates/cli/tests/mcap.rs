@@ -206,9 +206,9 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     // With a mount, the odometry is the vehicle's (`base`), the LIDAR
     // (`laser`) sits at the mount, and `/tf_static` says so.
     // `odom_topics` "/tf": the odometry as `odom -> base` transforms.
-    // `upside_down`: the LIDAR rolled by 180° on its mount (its scans
-    // mirrored, and /tf_static saying so).
-    let write = |path: &Path, odom_topics: &[&str], mount: Option<pcaline::Pose2>, upside_down| {
+    // `laser`: how the LIDAR sits on its mount: level, rolled by 180°
+    // (its scans mirrored, and /tf_static saying so), or pitched.
+    let write = |path: &Path, odom_topics: &[&str], mount: Option<pcaline::Pose2>, laser| {
         let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
         let mut w = mcap::Writer::new(file).unwrap();
         let scan_schema = w.add_schema("sensor_msgs/msg/LaserScan", "ros2msg", b"").unwrap();
@@ -226,18 +226,31 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
         let sensor_from_vehicle = mount.unwrap_or_default().inverse();
         if let Some(m) = mount {
             let tf = w.add_channel(tf_schema, "/tf_static", "cdr", &BTreeMap::new()).unwrap();
-            let t = pcaline_io::FrameTransform {
-                parent: "base".into(),
-                child: "laser".into(),
-                parent_from_child: m,
-                stamp_s: 0.0,
-                upside_down,
+            let t = match laser {
+                Laser::Level => pcaline_io::FrameTransform::planar("base", "laser", m, 0.0),
+                Laser::UpsideDown => {
+                    pcaline_io::FrameTransform::rolled_over("base", "laser", m, 0.0)
+                }
+                Laser::PitchedDeg(pitch) => {
+                    // Rz(yaw) Ry(pitch) as a quaternion (x, y, z, w).
+                    let ((sy, cy), (sp, cp)) =
+                        ((0.5 * m.heading()).sin_cos(), (0.5 * pitch.to_radians()).sin_cos());
+                    let q = [-sy * sp, cy * sp, sy * cp, cy * cp];
+                    pcaline_io::FrameTransform::from_3d(
+                        "base",
+                        "laser",
+                        [m.x(), m.y(), 0.2],
+                        q,
+                        0.0,
+                    )
+                    .unwrap()
+                }
             };
             messages.push((0.0, tf, pcaline_io::encode_tf_cdr(&[t])));
         }
         for f in &frames {
             let mut scan = f.scan.clone();
-            if upside_down {
+            if laser == Laser::UpsideDown {
                 scan.mirror();
             }
             messages.push((f.time_s, scans, pcaline_io::encode_laserscan_cdr(&scan, "laser")));
@@ -246,13 +259,9 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
             let vehicle = p.compose(&sensor_from_vehicle);
             for (ch, tf) in &odoms {
                 let data = if *tf {
-                    pcaline_io::encode_tf_cdr(&[pcaline_io::FrameTransform {
-                        parent: "odom".into(),
-                        child: "base".into(),
-                        parent_from_child: vehicle,
-                        stamp_s: *t,
-                        upside_down: false,
-                    }])
+                    pcaline_io::encode_tf_cdr(&[pcaline_io::FrameTransform::planar(
+                        "odom", "base", vehicle, *t,
+                    )])
                 } else {
                     pcaline_io::encode_odometry_cdr(*t, &vehicle, "odom", "base")
                 };
@@ -273,7 +282,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
         w.finish().unwrap();
     };
     let log = tmp("odom.mcap");
-    write(&log, &["/odom"], None, false);
+    write(&log, &["/odom"], None, Laser::Level);
     let out = tmp("odom-map");
     let o = pcaline(&["map", s(&log), "--out", s(&out)]);
     let err = String::from_utf8_lossy(&o.stderr);
@@ -307,7 +316,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     );
     // Two Odometry topics and none chosen: none used, and said; chosen: used.
     let two = tmp("odom2.mcap");
-    write(&two, &["/odom", "/wheel_odom"], None, false);
+    write(&two, &["/odom", "/wheel_odom"], None, Laser::Level);
     let o = pcaline(&["map", s(&two), "--out", s(&tmp("odom2-map"))]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
@@ -324,10 +333,11 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     // mount from /tf_static, and the scans placed as before.
     let mount = pcaline::Pose2::new(0.3, -0.05, 10f64.to_radians());
     let offset = tmp("odom-offset.mcap");
-    write(&offset, &["/odom"], Some(mount), false);
+    write(&offset, &["/odom"], Some(mount), Laser::Level);
     let out_offset = tmp("odom-offset-map");
     let err = map_log(&offset, &out_offset);
     assert!(err.contains("0.300 m forward, -0.050 m left and 10.00° turned"), "{err}");
+    assert!(!err.contains("tilts"), "{err}");
     let v: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out_offset.join("trajectory.json")).unwrap())
             .unwrap();
@@ -343,7 +353,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     // The same odometry kept in the transform tree instead (`/tf`, odom ->
     // base; no nav_msgs/Odometry, as many ROS bags have it): the same map.
     let in_tree = tmp("odom-tf.mcap");
-    write(&in_tree, &["/tf"], Some(mount), false);
+    write(&in_tree, &["/tf"], Some(mount), Laser::Level);
     let out_tree = tmp("odom-tf-map");
     let err = map_log(&in_tree, &out_tree);
     assert!(err.contains("odometry from /tf (odom -> base)"), "{err}");
@@ -354,7 +364,7 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
     // The LIDAR mounted upside down, which mirrors its scans, and the
     // transform tree saying so: the scans are mirrored back, the same map.
     let flipped = tmp("odom-upside-down.mcap");
-    write(&flipped, &["/odom"], Some(mount), true);
+    write(&flipped, &["/odom"], Some(mount), Laser::UpsideDown);
     let out_flipped = tmp("odom-upside-down-map");
     let err = map_log(&flipped, &out_flipped);
     assert!(err.contains("upside down (its scans mirrored)"), "{err}");
@@ -362,6 +372,22 @@ fn map_takes_a_ros_logs_odometry_as_the_source() {
         trajectory(&out_flipped) == trajectory(&out_offset),
         "the upside-down LIDAR's map differs"
     );
+    assert!(!err.contains("tilts"), "{err}");
+    // A LIDAR pitched 5° on its mount: its scans are taken as level, and
+    // stderr says so.
+    let pitched = tmp("odom-pitched.mcap");
+    write(&pitched, &["/odom"], Some(mount), Laser::PitchedDeg(5.0));
+    let err = map_log(&pitched, &tmp("odom-pitched-map"));
+    assert!(err.contains("0.300 m forward, -0.050 m left and 10.00° turned"), "{err}");
+    assert!(err.contains("tilts the scans' frame laser 5.0° out of the plane of base"), "{err}");
+}
+
+/// How the simulated LIDAR sits on its mount in the odometry test above.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Laser {
+    Level,
+    UpsideDown,
+    PitchedDeg(f64),
 }
 
 /// Scans on two topics (two LIDARs, each on its own mount) are not one

@@ -80,7 +80,9 @@ pub fn mount_from_pose_pairs(pairs: &[(Pose2, Pose2)]) -> Option<Pose2> {
 
 /// Where a sensor sits on the vehicle, in the plane: its pose, and whether
 /// its frame is mirrored (a LIDAR mounted upside down sees the plane with
-/// its y axis flipped: its bearings turn the other way).
+/// its y axis flipped: its bearings turn the other way). It also keeps the
+/// mount's rotation in space, whose tilt ([`PlanarMount::tilt_rad`]) the
+/// plane drops.
 ///
 /// A point `p` of the sensor's frame lies at `vehicle_from_sensor` applied
 /// to `p`, with `p.y` negated first when `mirrored`.
@@ -91,17 +93,36 @@ pub struct PlanarMount {
     pub vehicle_from_sensor: Pose2,
     /// The sensor's frame is mirrored.
     pub mirrored: bool,
+    /// The rotation in space, a unit quaternion `[x, y, z, w]`.
+    rotation_xyzw: [f64; 4],
 }
 
 impl PlanarMount {
-    /// A mount of pose `vehicle_from_sensor`, mirrored or not.
+    /// A level mount of pose `vehicle_from_sensor`, mirrored (rolled by
+    /// 180° about the sensor's x axis) or not.
     pub fn new(vehicle_from_sensor: Pose2, mirrored: bool) -> Self {
-        PlanarMount { vehicle_from_sensor, mirrored }
+        let (s, c) = (0.5 * vehicle_from_sensor.heading()).sin_cos();
+        let rotation_xyzw = if mirrored { [c, s, 0.0, 0.0] } else { [0.0, 0.0, s, c] };
+        PlanarMount { vehicle_from_sensor, mirrored, rotation_xyzw }
     }
 
     /// The mount of `transform`'s child in its parent.
     pub(crate) fn of(transform: &FrameTransform) -> Self {
-        PlanarMount::new(transform.parent_from_child, transform.upside_down)
+        PlanarMount {
+            rotation_xyzw: transform.rotation_xyzw,
+            ..PlanarMount::new(transform.parent_from_child, transform.upside_down)
+        }
+    }
+
+    /// How far the sensor's scan plane is tilted from the vehicle's plane,
+    /// radians in [0, pi/2]: the angle between the sensor's z axis and the
+    /// vehicle's z axis (or its opposite, for a mirrored mount). 0 for a
+    /// level mount; the mapping projects a tilted scan to the plane as it
+    /// is, so its ranges come out up to `1 / cos(tilt)` long.
+    pub fn tilt_rad(&self) -> f64 {
+        let [x, y, _, _] = self.rotation_xyzw;
+        // The rotation's (z, z) entry.
+        (1.0 - 2.0 * (x * x + y * y)).abs().min(1.0).acos()
     }
 
     /// `self` then `other`: `other`'s pose is mirrored into `self`'s frame
@@ -109,20 +130,41 @@ impl PlanarMount {
     pub(crate) fn compose(&self, other: &PlanarMount) -> Self {
         let o = other.vehicle_from_sensor;
         let o = if self.mirrored { Pose2::new(o.x(), -o.y(), -o.heading()) } else { o };
-        PlanarMount::new(self.vehicle_from_sensor.compose(&o), self.mirrored != other.mirrored)
+        PlanarMount {
+            vehicle_from_sensor: self.vehicle_from_sensor.compose(&o),
+            mirrored: self.mirrored != other.mirrored,
+            rotation_xyzw: quaternion_product(&self.rotation_xyzw, &other.rotation_xyzw),
+        }
     }
 
     /// The vehicle's mount on the sensor.
     fn inverse(&self) -> Self {
+        let [x, y, z, w] = self.rotation_xyzw;
+        let rotation_xyzw = [-x, -y, -z, w];
         let p = self.vehicle_from_sensor;
         if !self.mirrored {
-            return PlanarMount::new(p.inverse(), false);
+            return PlanarMount { rotation_xyzw, ..PlanarMount::new(p.inverse(), false) };
         }
         // q = M R(-h) (p - t) = R(h) M p - R(h) M t for a mirror M.
         let (s, c) = p.heading().sin_cos();
         let (x, y) = (p.x(), -p.y());
-        PlanarMount::new(Pose2::new(-(c * x - s * y), -(s * x + c * y), p.heading()), true)
+        PlanarMount {
+            rotation_xyzw,
+            ..PlanarMount::new(Pose2::new(-(c * x - s * y), -(s * x + c * y), p.heading()), true)
+        }
     }
+}
+
+/// The Hamilton product `a b` of quaternions `[x, y, z, w]`: rotation `b`,
+/// then `a`.
+fn quaternion_product(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    let ([ax, ay, az, aw], [bx, by, bz, bw]) = (*a, *b);
+    [
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    ]
 }
 
 /// The mount of frame `sensor` in frame `vehicle` through the tree of
@@ -136,13 +178,7 @@ impl PlanarMount {
 /// ```
 /// use pcaline_geometry::Pose2;
 /// use pcaline_io::{FrameTransform, mount_from_transforms};
-/// let t = |p: &str, c: &str, x: f64| FrameTransform {
-///     parent: p.into(),
-///     child: c.into(),
-///     parent_from_child: Pose2::new(x, 0.0, 0.0),
-///     stamp_s: 0.0,
-///     upside_down: false,
-/// };
+/// let t = |p: &str, c: &str, x: f64| FrameTransform::planar(p, c, Pose2::new(x, 0.0, 0.0), 0.0);
 /// let tree = [t("base_footprint", "base_link", 0.1), t("base_link", "laser", 0.2)];
 /// let m = mount_from_transforms(&tree, "base_footprint", "/laser").unwrap();
 /// assert!((m.vehicle_from_sensor.x() - 0.3).abs() < 1e-12 && !m.mirrored);
@@ -196,13 +232,7 @@ mod tests {
 
     #[test]
     fn a_chain_walked_both_ways_composes() {
-        let t = |p: &str, c: &str, pose: Pose2| FrameTransform {
-            parent: p.into(),
-            child: c.into(),
-            parent_from_child: pose,
-            stamp_s: 0.0,
-            upside_down: false,
-        };
+        let t = |p: &str, c: &str, pose: Pose2| FrameTransform::planar(p, c, pose, 0.0);
         // odom -> base_link -> plate -> laser, with the laser's frame turned.
         let tree = [
             t("odom", "base_link", Pose2::new(5.0, 5.0, 1.0)),
@@ -241,12 +271,12 @@ mod tests {
             let q = m.vehicle_from_sensor.transform_point(&pcaline_geometry::Point2::new(p[0], y));
             [q.x, q.y]
         };
-        let t = |parent: &str, child: &str, pose: Pose2, upside_down: bool| FrameTransform {
-            parent: parent.into(),
-            child: child.into(),
-            parent_from_child: pose,
-            stamp_s: 0.0,
-            upside_down,
+        let t = |parent: &str, child: &str, pose: Pose2, upside_down: bool| {
+            if upside_down {
+                FrameTransform::rolled_over(parent, child, pose, 0.0)
+            } else {
+                FrameTransform::planar(parent, child, pose, 0.0)
+            }
         };
         let (a, b) = (Pose2::new(0.3, -0.1, 0.4), Pose2::new(0.05, 0.2, -1.1));
         for flips in [[true, false], [false, true], [true, true]] {
@@ -312,5 +342,33 @@ mod tests {
             .map(|(i, v)| (v, v.compose(&Pose2::new(0.3 + 0.001 * (i % 2) as f64, 0.0, 0.0))))
             .collect();
         assert!(mount_from_pose_pairs(&noisy).is_some());
+    }
+
+    /// The tilt of a chain is that of the composed rotations: two opposite
+    /// pitches cancel, an upside-down mount is level, and walking the chain
+    /// backwards gives the same tilt.
+    #[test]
+    fn the_tilt_of_a_chain_is_that_of_its_rotations() {
+        let pitch = |p: &str, c: &str, deg: f64| {
+            let h = 0.5 * deg.to_radians();
+            FrameTransform::from_3d(p, c, [0.1, 0.0, 0.3], [0.0, h.sin(), 0.0, h.cos()], 0.0)
+                .unwrap()
+        };
+        let roll_over =
+            FrameTransform::rolled_over("plate", "laser", Pose2::new(0.0, 0.0, 1.0), 0.0);
+        let cases = [
+            (vec![pitch("base", "laser", 10.0)], 10.0),
+            (vec![pitch("base", "plate", 10.0), pitch("plate", "laser", -10.0)], 0.0),
+            (vec![pitch("base", "plate", 4.0), pitch("plate", "laser", 3.0)], 7.0),
+            (vec![pitch("base", "plate", 0.0), roll_over.clone()], 0.0),
+            (vec![pitch("base", "plate", 5.0), roll_over], 5.0),
+        ];
+        for (tree, want_deg) in cases {
+            for (from, to) in [("base", "laser"), ("laser", "base")] {
+                let m = mount_from_transforms(&tree, from, to).unwrap();
+                assert!((m.tilt_rad().to_degrees() - want_deg).abs() < 1e-9, "{tree:?}: {m:?}");
+            }
+        }
+        assert_eq!(PlanarMount::new(Pose2::new(1.0, 2.0, 3.0), true).tilt_rad(), 0.0);
     }
 }

@@ -589,13 +589,12 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let pose = |k: usize| pcaline_geometry::Pose2::new(k as f64, 0.5, 0.1 * k as f64);
         let scan = Scan::new(-1.0, 0.01, 0.1, 30.0, vec![2.0; 100]).with_stamp(0.5);
-        let laser = crate::FrameTransform {
-            parent: "base_link".into(),
-            child: "laser".into(),
-            parent_from_child: pcaline_geometry::Pose2::new(0.2, 0.0, 0.0),
-            stamp_s: 0.0,
-            upside_down: false,
-        };
+        let laser = crate::FrameTransform::planar(
+            "base_link",
+            "laser",
+            pcaline_geometry::Pose2::new(0.2, 0.0, 0.0),
+            0.0,
+        );
         let tf = ("/tf_static", crate::encode_tf_cdr(std::slice::from_ref(&laser)));
         let messages: Vec<(&str, Vec<u8>)> = std::iter::once(tf)
             .chain((0..4).flat_map(|k| {

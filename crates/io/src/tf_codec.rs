@@ -9,7 +9,8 @@
 use crate::ros_cursor::Cursor;
 use pcaline_geometry::Pose2;
 
-/// One transform of a `tf2_msgs/TFMessage`, in the plane.
+/// One transform of a `tf2_msgs/TFMessage`: its rotation as read, and its
+/// projection to the plane, which is what the mapping uses.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameTransform {
     /// The parent frame (the header's `frame_id`), without a leading `/`.
@@ -26,6 +27,76 @@ pub struct FrameTransform {
     /// is mirrored (its y flipped) before `parent_from_child`, whose
     /// heading is then the child's x axis, places it.
     pub upside_down: bool,
+    /// The rotation as read, a unit quaternion `[x, y, z, w]`: what the
+    /// plane drops of it is the tilt ([`crate::PlanarMount::tilt_rad`]).
+    pub rotation_xyzw: [f64; 4],
+}
+
+impl FrameTransform {
+    /// A transform in the plane: a turn of `parent_from_child`'s heading
+    /// about z, the child level.
+    pub fn planar(
+        parent: impl Into<String>,
+        child: impl Into<String>,
+        parent_from_child: Pose2,
+        stamp_s: f64,
+    ) -> Self {
+        let (s, c) = (0.5 * parent_from_child.heading()).sin_cos();
+        FrameTransform {
+            parent: parent.into(),
+            child: child.into(),
+            parent_from_child,
+            stamp_s,
+            upside_down: false,
+            rotation_xyzw: [0.0, 0.0, s, c],
+        }
+    }
+
+    /// A transform whose child is upside down: `Rz(heading) Rx(pi)`, the
+    /// child's x axis along `parent_from_child`'s heading and its z axis
+    /// pointing down.
+    pub fn rolled_over(
+        parent: impl Into<String>,
+        child: impl Into<String>,
+        parent_from_child: Pose2,
+        stamp_s: f64,
+    ) -> Self {
+        let (s, c) = (0.5 * parent_from_child.heading()).sin_cos();
+        FrameTransform {
+            upside_down: true,
+            rotation_xyzw: [c, s, 0.0, 0.0],
+            ..Self::planar(parent, child, parent_from_child, stamp_s)
+        }
+    }
+
+    /// A transform as a message gives it: the child's origin at
+    /// `translation_m` (x, y, z) and rotated by `rotation_xyzw`, whose
+    /// length must lie within 0.5 and 1.5 of one (`None` otherwise, or when
+    /// it is not finite). Its planar pose is x, y and the yaw of the
+    /// rotation's x axis; `rotation_xyzw` keeps the rotation normalized.
+    pub fn from_3d(
+        parent: impl Into<String>,
+        child: impl Into<String>,
+        translation_m: [f64; 3],
+        rotation_xyzw: [f64; 4],
+        stamp_s: f64,
+    ) -> Option<Self> {
+        let norm = rotation_xyzw.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !(norm > 0.5 && norm < 1.5) {
+            return None;
+        }
+        let [qx, qy, qz, qw] = rotation_xyzw;
+        let yaw = (2.0 * (qw * qz + qx * qy)).atan2(1.0 - 2.0 * (qy * qy + qz * qz));
+        Some(FrameTransform {
+            parent: parent.into(),
+            child: child.into(),
+            parent_from_child: Pose2::new(translation_m[0], translation_m[1], yaw),
+            stamp_s,
+            // The rotation's (z, z) entry: the child's z axis along the parent's.
+            upside_down: 1.0 - 2.0 * (qx * qx + qy * qy) < 0.0,
+            rotation_xyzw: rotation_xyzw.map(|v| v / norm),
+        })
+    }
 }
 
 /// A frame name as ROS 1 and ROS 2 write it, compared without its leading `/`.
@@ -49,16 +120,15 @@ fn transforms(c: &mut Cursor<'_>) -> Result<Vec<FrameTransform>, String> {
         for x in &mut v {
             *x = c.f64("transform")?;
         }
-        let (qx, qy, qz, qw) = (v[3], v[4], v[5], v[6]);
-        let norm = (qx * qx + qy * qy + qz * qz + qw * qw).sqrt();
-        if !(norm > 0.5 && norm < 1.5) {
-            return Err(format!("transform {k}: the rotation is not a unit quaternion"));
-        }
-        let yaw = (2.0 * (qw * qz + qx * qy)).atan2(1.0 - 2.0 * (qy * qy + qz * qz));
-        let parent_from_child = Pose2::new(v[0], v[1], yaw);
-        // The rotation's (z, z) entry: the child's z axis along the parent's.
-        let upside_down = 1.0 - 2.0 * (qx * qx + qy * qy) < 0.0;
-        out.push(FrameTransform { parent, child, parent_from_child, stamp_s, upside_down });
+        let t = FrameTransform::from_3d(
+            parent,
+            child,
+            [v[0], v[1], v[2]],
+            [v[3], v[4], v[5], v[6]],
+            stamp_s,
+        )
+        .ok_or_else(|| format!("transform {k}: the rotation is not a unit quaternion"))?;
+        out.push(t);
     }
     Ok(out)
 }
@@ -69,13 +139,7 @@ fn transforms(c: &mut Cursor<'_>) -> Result<Vec<FrameTransform>, String> {
 /// ```
 /// use pcaline_geometry::Pose2;
 /// use pcaline_io::{FrameTransform, decode_tf_cdr, encode_tf_cdr};
-/// let t = FrameTransform {
-///     parent: "base_link".into(),
-///     child: "laser".into(),
-///     parent_from_child: Pose2::new(0.2, 0.0, 0.1),
-///     stamp_s: 0.0,
-///     upside_down: false,
-/// };
+/// let t = FrameTransform::planar("base_link", "laser", Pose2::new(0.2, 0.0, 0.1), 0.0);
 /// let back = decode_tf_cdr(&encode_tf_cdr(&[t.clone()])).unwrap();
 /// assert_eq!(back[0].child, "laser");
 /// assert!((back[0].parent_from_child.heading() - 0.1).abs() < 1e-12);
@@ -90,7 +154,7 @@ pub fn decode_tf_ros1(data: &[u8]) -> Result<Vec<FrameTransform>, String> {
 }
 
 /// Encodes little-endian CDR `tf2_msgs/msg/TFMessage` of `transforms`
-/// (rotations about z, rolled by 180° when upside down; stamps in whole
+/// (each with its x, y, z = 0 and its `rotation_xyzw`; stamps in whole
 /// nanoseconds, a negative or non-finite one as 0).
 pub fn encode_tf_cdr(transforms: &[FrameTransform]) -> Vec<u8> {
     let mut out = vec![0u8, 1, 0, 0];
@@ -114,10 +178,7 @@ pub fn encode_tf_cdr(transforms: &[FrameTransform]) -> Vec<u8> {
             out.push(0);
         }
         pad(&mut out, 8);
-        let p = &t.parent_from_child;
-        let (s, c) = (0.5 * p.heading()).sin_cos();
-        // Rz(yaw), or Rz(yaw) Rx(pi) upside down: (x, y, z, w).
-        let q = if t.upside_down { [c, s, 0.0, 0.0] } else { [0.0, 0.0, s, c] };
+        let (p, q) = (&t.parent_from_child, &t.rotation_xyzw);
         for v in [p.x(), p.y(), 0.0, q[0], q[1], q[2], q[3]] {
             out.extend_from_slice(&v.to_le_bytes());
         }
@@ -133,20 +194,8 @@ mod tests {
     #[test]
     fn two_transforms_round_trip_and_names_lose_their_slash() {
         let ts = [
-            FrameTransform {
-                parent: "odom".into(),
-                child: "base".into(),
-                parent_from_child: Pose2::new(1.0, 2.0, -0.5),
-                stamp_s: 1234.5,
-                upside_down: false,
-            },
-            FrameTransform {
-                parent: "/base".into(),
-                child: "laser_frame".into(),
-                parent_from_child: Pose2::new(0.3, -0.1, 3.0),
-                stamp_s: 0.0,
-                upside_down: false,
-            },
+            FrameTransform::planar("odom", "base", Pose2::new(1.0, 2.0, -0.5), 1234.5),
+            FrameTransform::planar("/base", "laser_frame", Pose2::new(0.3, -0.1, 3.0), 0.0),
         ];
         let back = decode_tf_cdr(&encode_tf_cdr(&ts)).unwrap();
         assert_eq!(back.len(), 2);

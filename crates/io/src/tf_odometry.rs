@@ -46,12 +46,8 @@ const UNCHANGING: f64 = 1e-9;
 /// ```
 /// use pcaline_geometry::Pose2;
 /// use pcaline_io::{FrameTransform, odometry_from_transforms};
-/// let t = |parent: &str, child: &str, pose: Pose2, stamp_s: f64| FrameTransform {
-///     parent: parent.into(),
-///     child: child.into(),
-///     parent_from_child: pose,
-///     stamp_s,
-///     upside_down: false,
+/// let t = |parent: &str, child: &str, pose: Pose2, stamp_s: f64| {
+///     FrameTransform::planar(parent, child, pose, stamp_s)
 /// };
 /// let statics = [t("base_link", "laser", Pose2::new(0.2, 0.0, 0.0), 0.0)];
 /// let moving = [
@@ -119,13 +115,7 @@ mod tests {
     use super::*;
 
     fn t(parent: &str, child: &str, pose: Pose2, stamp_s: f64) -> FrameTransform {
-        FrameTransform {
-            parent: parent.into(),
-            child: child.into(),
-            parent_from_child: pose,
-            stamp_s,
-            upside_down: false,
-        }
+        FrameTransform::planar(parent, child, pose, stamp_s)
     }
 
     /// REP 105's tree with ROS 1's habits: the laser's mount published on
