@@ -151,6 +151,8 @@ struct SourceGap {
     calibration: SourceCalibration,
     /// That scan's stamp, if it had one.
     stamp_s: Option<f64>,
+    /// Scans since then without the source.
+    scans: u32,
 }
 
 impl Aiding {
@@ -297,7 +299,12 @@ impl Aiding {
                     if self.last_dt_s.is_some() {
                         self.last_dt_s = g.stamp_s.zip(self.last_stamp_s).map(|(a, b)| b - a);
                     }
-                    self.step_increment(&g.source.between(source_pose), lines)
+                    let out = self.step_increment(&g.source.between(source_pose), lines);
+                    // The motion a constant-velocity prediction repeats is
+                    // one scan's share of the gap's, not the whole of it.
+                    let share = 1.0 / f64::from(g.scans + 1);
+                    self.last_motion = self.last_motion.map(|m| Pose2::identity().lerp(&m, share));
+                    out
                 }
                 // It starts after the first scans, or jumped across the gap
                 // (a frame of its own, a reset): its frame is not the
@@ -360,7 +367,10 @@ impl Aiding {
                 covariance: self.covariance,
                 calibration: self.calibration,
                 stamp_s: last_stamp_s,
+                scans: 1,
             });
+        } else if let Some(g) = &mut self.gap {
+            g.scans += 1;
         }
         let Some(previous) = self.corrected else {
             return self.process(
@@ -1143,6 +1153,17 @@ mod tests {
         b.reanchor(LineMap::new(MapConfig::default()).unwrap(), &moved);
         let (pose, _) = b.step_at(2.0, &Pose2::new(1.0, 0.0, 0.0), none);
         let d = pose.between(&moved.compose(&Pose2::new(1.0, 0.0, 0.0)));
+        assert!(d.x().hypot(d.y()) < 1e-9 && d.heading().abs() < 1e-9, "{pose:?}");
+        // Unstamped, a scan without the source after a bridged gap of two
+        // scans repeats one scan's motion (0.1 m), not the gap's (0.3 m).
+        let mut c = aiding(AidingConfig::estimator());
+        c.step(&Pose2::identity(), none);
+        c.step_without_source(None, none);
+        c.step_without_source(None, none);
+        c.step(&Pose2::new(0.3, 0.0, 0.03), none);
+        let (pose, report) = c.step_without_source(None, none);
+        assert_eq!(report.prediction, Prediction::ConstantVelocity);
+        let d = pose.between(&Pose2::new(0.3, 0.0, 0.03).compose(&Pose2::new(0.1, 0.0, 0.01)));
         assert!(d.x().hypot(d.y()) < 1e-9 && d.heading().abs() < 1e-9, "{pose:?}");
     }
 
