@@ -105,19 +105,19 @@ fn scan_lines(index: usize, s: &ScanRecord, d: &Detection<'_>) -> ScanLines {
             estimated: d.noise_estimate.is_some(),
             range_step_m: d.noise_estimate.map(|e| e.range_step_m),
         }),
-        lines: d
-            .lines
-            .iter()
-            .map(|l| {
-                let s = l.straightness;
-                LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))).with_straightness(
-                    s.residual_ratio,
-                    s.runs_z,
-                    s.bow_m,
-                )
-            })
-            .collect(),
+        lines: d.lines.iter().map(line_record).collect(),
     }
+}
+
+/// A detected line as the JSON and CSV outputs write it: the line, its
+/// beams and its straightness.
+pub(crate) fn line_record(l: &pcaline::DetectedLine) -> LineRecord {
+    let s = l.straightness;
+    LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))).with_straightness(
+        s.residual_ratio,
+        s.runs_z,
+        s.bow_m,
+    )
 }
 
 /// Where the lines go: a file written atomically, or stdout.

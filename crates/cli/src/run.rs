@@ -222,11 +222,7 @@ pub fn run(args: &RunArgs, quiet: bool) -> Result<()> {
                 heading_aided_pose: [f64::NAN; 3],
                 estimator_pose: [f64::NAN; 3],
                 loop_closure_pose: [f64::NAN; 3],
-                lines: detection
-                    .lines
-                    .iter()
-                    .map(|l| LineRecord::new(&l.line, Some((l.first_beam, l.last_beam))))
-                    .collect(),
+                lines: detection.lines.iter().map(crate::detect::line_record).collect(),
             });
             bar.inc(1);
             sensor_lines

@@ -50,6 +50,13 @@ fn run_on_a_small_generated_scene_writes_every_output() {
     }
     let svg = std::fs::read_to_string(dir.join("map.svg")).unwrap();
     assert!(svg.contains("x (m)") && svg.contains("line map"));
+    // Each scan's lines carry their straightness, as `detect` writes them.
+    let scans: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("scans.json")).unwrap()).unwrap();
+    let line = &scans[0]["lines"][0];
+    for key in ["residual_ratio", "runs_z", "bow_m"] {
+        assert!(line[key].as_f64().is_some_and(f64::is_finite), "{key}: {line}");
+    }
     // Figures 10 and 11 again, from the saved map and trajectories.
     let fig10 = tmp("fig10.svg");
     let out = pcaline(&[
