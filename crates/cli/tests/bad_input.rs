@@ -97,7 +97,7 @@ fn carmen_lines_that_do_not_add_up_or_hold_nan_are_refused() {
 #[test]
 fn a_topic_without_laserscans_lists_the_topics_that_have_them() {
     let Some(bag) = data("ros1/laser_scan_matcher_demo.bag") else { return };
-    refused(&["detect", s(&bag), "--topic", "/nope"], &["\"/nope\"", "LaserScan topics: /scan"]);
+    refused(&["detect", s(&bag), "--topic", "/nope"], &["\"/nope\"", "scan topics: /scan"]);
 }
 
 #[test]

@@ -1,5 +1,6 @@
-//! `sensor_msgs/LaserScan` decoding: ROS 2 CDR and ROS 1 serialization.
-//! (And CDR encoding, to write MCAP and bag files for tests and examples.)
+//! `sensor_msgs/LaserScan` and `sensor_msgs/MultiEchoLaserScan` decoding:
+//! ROS 2 CDR and ROS 1 serialization. (And CDR encoding, to write MCAP and
+//! bag files for tests and examples.)
 //!
 //! Both layouts: `Header` (stamp, frame_id), then `angle_min`, `angle_max`,
 //! `angle_increment`, `time_increment`, `scan_time`, `range_min`,
@@ -9,12 +10,23 @@
 //! from the end of that header; its `Header` has no `seq` and its time is
 //! `int32 sec, uint32 nanosec`. ROS 1 is packed little-endian with a
 //! `uint32 seq` first.
+//!
+//! A `MultiEchoLaserScan` (a UTM-30LX-EW's `echoes` from `urg_node`, a
+//! SICK LMS5xx's) has the same fields, but `ranges` and `intensities` are
+//! sequences of `LaserEcho`, each a float32 sequence of the beam's returns,
+//! nearest first. The first echo of each beam is its range (an empty beam
+//! is no return); [`decode_multiecho_cdr`] and [`decode_multiecho_ros1`].
 
 use crate::ros_cursor::Cursor;
 use pcaline_geometry::Scan;
 
-/// The fields after the header, shared by both layouts.
-fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
+/// The fields after the header, shared by both layouts; the ranges and
+/// intensities are read by `beams` (one value a beam, or a beam's echoes).
+fn body(
+    c: &mut Cursor<'_>,
+    stamp_s: f64,
+    beams: fn(&mut Cursor<'_>, &str) -> Result<Vec<f32>, String>,
+) -> Result<Scan, String> {
     let angle_min = c.f32("angle_min")?;
     let _angle_max = c.f32("angle_max")?;
     let angle_increment = c.f32("angle_increment")?;
@@ -22,8 +34,8 @@ fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
     let _scan_time = c.f32("scan_time")?;
     let range_min = c.f32("range_min")?;
     let range_max = c.f32("range_max")?;
-    let ranges = c.f32_seq("ranges")?;
-    let intensities = c.f32_seq("intensities")?;
+    let ranges = beams(c, "ranges")?;
+    let intensities = beams(c, "intensities")?;
     let mut scan =
         Scan::new(angle_min, angle_increment, range_min, range_max, ranges).with_stamp(stamp_s);
     if !intensities.is_empty() {
@@ -40,7 +52,7 @@ fn body(c: &mut Cursor<'_>, stamp_s: f64) -> Result<Scan, String> {
 pub fn decode_laserscan_cdr(data: &[u8]) -> Result<Scan, String> {
     let mut c = Cursor::cdr(data)?;
     let (stamp_s, _frame) = c.header()?;
-    body(&mut c, stamp_s)
+    body(&mut c, stamp_s, |c, what| c.f32_seq(what))
 }
 
 /// The `frame_id` of a LaserScan (the header alone is read), without a
@@ -54,7 +66,84 @@ pub(crate) fn laserscan_frame(data: &[u8], ros1: bool) -> Result<String, String>
 pub fn decode_laserscan_ros1(data: &[u8]) -> Result<Scan, String> {
     let mut c = Cursor::ros1(data);
     let (stamp_s, _frame) = c.header()?;
-    body(&mut c, stamp_s)
+    body(&mut c, stamp_s, |c, what| c.f32_seq(what))
+}
+
+/// A sequence of `LaserEcho`: each beam's first echo, NaN (no return) for a
+/// beam without one.
+fn first_echoes(c: &mut Cursor<'_>, what: &str) -> Result<Vec<f32>, String> {
+    let n = c.u32(what)? as usize;
+    // Each echo list is at least its 4-byte count: a corrupt count must not
+    // become a huge allocation.
+    if n.saturating_mul(4) > c.remaining() {
+        return Err(format!("{what}: {n} beams do not fit in the message"));
+    }
+    (0..n).map(|_| Ok(c.f32_seq(what)?.first().copied().unwrap_or(f32::NAN))).collect()
+}
+
+/// Decodes a ROS 2 `sensor_msgs/msg/MultiEchoLaserScan` in CDR as the scan
+/// of each beam's first echo (the nearest return), with its intensity.
+/// Errors say what was being read where.
+///
+/// ```
+/// use pcaline_geometry::Scan;
+/// use pcaline_io::{decode_multiecho_cdr, encode_multiecho_cdr};
+/// let echoes = vec![vec![2.0, 5.0], vec![], vec![3.0]];
+/// let data = encode_multiecho_cdr(-1.0, 0.01, 0.1, 30.0, 4.5, &echoes, "laser");
+/// let scan = decode_multiecho_cdr(&data).unwrap();
+/// assert_eq!(scan.ranges[0], 2.0);
+/// assert!(scan.ranges[1].is_nan()); // no echo: no return
+/// assert_eq!((scan.ranges[2], scan.stamp_s), (3.0, Some(4.5)));
+/// ```
+pub fn decode_multiecho_cdr(data: &[u8]) -> Result<Scan, String> {
+    let mut c = Cursor::cdr(data)?;
+    let (stamp_s, _frame) = c.header()?;
+    body(&mut c, stamp_s, first_echoes)
+}
+
+/// Decodes a ROS 1 `sensor_msgs/MultiEchoLaserScan`, as
+/// [`decode_multiecho_cdr`] does.
+pub fn decode_multiecho_ros1(data: &[u8]) -> Result<Scan, String> {
+    let mut c = Cursor::ros1(data);
+    let (stamp_s, _frame) = c.header()?;
+    body(&mut c, stamp_s, first_echoes)
+}
+
+/// Encodes a little-endian CDR `sensor_msgs/msg/MultiEchoLaserScan` of
+/// `echoes` (each beam's ranges, nearest first), without intensities, for
+/// tests and examples.
+pub fn encode_multiecho_cdr(
+    angle_min: f32,
+    angle_increment: f32,
+    range_min: f32,
+    range_max: f32,
+    stamp_s: f64,
+    echoes: &[Vec<f32>],
+    frame_id: &str,
+) -> Vec<u8> {
+    let mut out = vec![0u8, 1, 0, 0];
+    let sec = stamp_s.floor();
+    out.extend_from_slice(&(sec as i32).to_le_bytes());
+    out.extend_from_slice(&(((stamp_s - sec) * 1e9).round() as u32).to_le_bytes());
+    out.extend_from_slice(&(frame_id.len() as u32 + 1).to_le_bytes());
+    out.extend_from_slice(frame_id.as_bytes());
+    out.push(0);
+    while !(out.len() - 4).is_multiple_of(4) {
+        out.push(0);
+    }
+    let angle_max = angle_min + angle_increment * echoes.len().saturating_sub(1) as f32;
+    for v in [angle_min, angle_max, angle_increment, 0.0, 0.0, range_min, range_max] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&(echoes.len() as u32).to_le_bytes());
+    for beam in echoes {
+        out.extend_from_slice(&(beam.len() as u32).to_le_bytes());
+        for v in beam {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out.extend_from_slice(&0u32.to_le_bytes()); // no intensities
+    out
 }
 
 /// Encodes a scan as a little-endian CDR `sensor_msgs/msg/LaserScan`.
@@ -111,11 +200,37 @@ mod tests {
         assert!(e.contains("ranges") || e.contains("intensities"), "{e}");
     }
 
+    /// Each beam's first echo is its range, a beam without one no return;
+    /// truncation is an error naming the field; the ROS 1 layout reads the
+    /// same beams.
+    #[test]
+    fn multiecho_takes_each_beams_first_echo() {
+        let echoes = vec![vec![1.5, 7.0, 9.0], vec![], vec![2.5], vec![f32::INFINITY, 3.0]];
+        let data = encode_multiecho_cdr(-0.5, 0.25, 0.02, 30.0, 12.25, &echoes, "laser01");
+        let scan = decode_multiecho_cdr(&data).unwrap();
+        assert_eq!((scan.angle_min, scan.angle_increment), (-0.5, 0.25));
+        assert_eq!((scan.range_min, scan.range_max, scan.stamp_s), (0.02, 30.0, Some(12.25)));
+        assert_eq!(scan.ranges.len(), 4);
+        assert_eq!((scan.ranges[0], scan.ranges[2], scan.ranges[3]), (1.5, 2.5, f32::INFINITY));
+        assert!(scan.ranges[1].is_nan() && scan.intensities.is_none());
+        let e = decode_multiecho_cdr(&data[..data.len() - 12]).unwrap_err();
+        assert!(e.contains("ranges") || e.contains("intensities"), "{e}");
+        // ROS 1: a seq before the stamp, no encapsulation header, packed
+        // (a frame name of 7 bytes leaves no CDR padding to take out).
+        let mut ros1 = 7u32.to_le_bytes().to_vec();
+        ros1.extend_from_slice(&data[4..]);
+        let back = decode_multiecho_ros1(&ros1).unwrap();
+        assert_eq!(back.ranges[0], 1.5);
+        assert!(back.ranges[1].is_nan());
+    }
+
     proptest! {
         #[test]
         fn random_bytes_never_panic(data in prop::collection::vec(any::<u8>(), 0..300)) {
             let _ = decode_laserscan_cdr(&data);
             let _ = decode_laserscan_ros1(&data);
+            let _ = decode_multiecho_cdr(&data);
+            let _ = decode_multiecho_ros1(&data);
         }
     }
 }

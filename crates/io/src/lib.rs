@@ -37,7 +37,10 @@ pub use foxglove_mcap::{
     FRAME_SENSOR, FRAME_WORLD, FoxgloveMcapWriter, PoseKind, Stamp, Topic, TopicCounts,
     foxglove_schema,
 };
-pub use laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1, encode_laserscan_cdr};
+pub use laserscan_codec::{
+    decode_laserscan_cdr, decode_laserscan_ros1, decode_multiecho_cdr, decode_multiecho_ros1,
+    encode_laserscan_cdr, encode_multiecho_cdr,
+};
 pub use lines_file::{
     LineRecord, LinesFormat, LinesWriter, NoiseRecord, PoseSeries, ScanLines, json_bytes,
     lines_to_csv, lines_to_json, map_csv_text, map_json_bytes, read_map, read_pose_series,

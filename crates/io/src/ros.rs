@@ -1,10 +1,14 @@
 //! ROS logs: ROS 1 bags (format 2.0, via `rosbag`), ROS 2 bags (sqlite3
 //! `.db3`, via `rusqlite` with the bundled SQLite), and MCAP (via `mcap`),
-//! yielding every `sensor_msgs/LaserScan` (optionally of one topic); and
+//! yielding every `sensor_msgs/LaserScan` and `sensor_msgs/MultiEchoLaserScan`
+//! (its first echoes; optionally of one topic); and
 //! their `nav_msgs/Odometry` topic by topic, the scans' frame and the
 //! static transforms ([`read_ros_motion`]).
 
-use crate::laserscan_codec::{decode_laserscan_cdr, decode_laserscan_ros1, laserscan_frame};
+use crate::laserscan_codec::{
+    decode_laserscan_cdr, decode_laserscan_ros1, decode_multiecho_cdr, decode_multiecho_ros1,
+    laserscan_frame,
+};
 use crate::odometry_codec::{decode_odometry_cdr, decode_odometry_ros1};
 use crate::tf_codec::{decode_tf_cdr, decode_tf_ros1};
 use crate::{IoError, LogFormat, LogRecord, OdometryRecord, ScanRecord};
@@ -14,6 +18,8 @@ use std::path::Path;
 
 const ROS1_TYPE: &str = "sensor_msgs/LaserScan";
 const ROS2_TYPE: &str = "sensor_msgs/msg/LaserScan";
+const ROS1_MULTIECHO: &str = "sensor_msgs/MultiEchoLaserScan";
+const ROS2_MULTIECHO: &str = "sensor_msgs/msg/MultiEchoLaserScan";
 const ROS1_ODOMETRY: &str = "nav_msgs/Odometry";
 const ROS2_ODOMETRY: &str = "nav_msgs/msg/Odometry";
 const ROS1_TF: &str = "tf2_msgs/TFMessage";
@@ -89,10 +95,11 @@ pub fn read_ros1_bag(
 /// A pass over the messages of one type of a ROS log.
 type MessagePass = fn(&Path, &[Wanted<'_>], &mut Visit<'_>) -> Result<Pass, IoError>;
 
-/// The LaserScans of a pass (`messages`), decoded by `decode`, each decode
-/// error naming its `label` (message number or id). Returns the scans
-/// read; a `topic` asked for that no LaserScan channel has is an error,
-/// unless `visit` stopped the pass early.
+/// The scans of a pass (`messages`): LaserScans, and MultiEchoLaserScans
+/// as the scan of each beam's first echo; each decode error names its
+/// `label` (message number or id). Returns the scans read; a `topic` asked
+/// for that no scan channel has is an error, unless `visit` stopped the
+/// pass early.
 fn read_scans(
     path: &Path,
     topic: Option<&str>,
@@ -100,23 +107,36 @@ fn read_scans(
     messages: MessagePass,
     label: &str,
 ) -> Result<usize, IoError> {
-    let wanted = Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic };
+    let wanted = scan_types(topic);
     let mut count = 0;
-    let pass = messages(path, &[wanted], &mut |m| {
-        let scan = match m.encoding {
-            Encoding::Cdr => decode_laserscan_cdr(m.data),
-            Encoding::Ros1 => decode_laserscan_ros1(m.data),
+    let mut pass = messages(path, &wanted, &mut |m| {
+        let (scan, name) = match (m.kind, m.encoding) {
+            (0, Encoding::Cdr) => (decode_laserscan_cdr(m.data), "LaserScan"),
+            (0, Encoding::Ros1) => (decode_laserscan_ros1(m.data), "LaserScan"),
+            (_, Encoding::Cdr) => (decode_multiecho_cdr(m.data), "MultiEchoLaserScan"),
+            (_, Encoding::Ros1) => (decode_multiecho_ros1(m.data), "MultiEchoLaserScan"),
         };
         let scan = scan.map_err(|e| {
-            IoError::parse(m.file, None, format!("{label} {}: LaserScan: {e}", m.position))
+            IoError::parse(m.file, None, format!("{label} {}: {name}: {e}", m.position))
         })?;
         count += 1;
         Ok(visit(scan_record(scan, m.position)))
     })?;
     if !pass.stopped {
+        let multiecho = std::mem::take(&mut pass.topics[1]);
+        pass.topics[0].extend(multiecho);
         topic_exists(path, topic, &pass.topics[0])?;
     }
     Ok(count)
+}
+
+/// The scan messages of a pass, of `topic` when given: LaserScans (kind
+/// 0) and MultiEchoLaserScans (kind 1).
+fn scan_types(topic: Option<&str>) -> [Wanted<'_>; 2] {
+    [
+        Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic },
+        Wanted { ros1_type: ROS1_MULTIECHO, ros2_type: ROS2_MULTIECHO, topic },
+    ]
 }
 
 /// The wanted messages of a ROS 1 bag, in chunk order (see
@@ -234,8 +254,8 @@ fn read_ros1_checked(
     Ok(pass)
 }
 
-/// A `topic` asked for that no LaserScan channel has is an error listing
-/// the LaserScan topics that do exist.
+/// A `topic` asked for that no scan channel has is an error listing the
+/// scan topics (LaserScan and MultiEchoLaserScan) that do exist.
 fn topic_exists(
     path: &Path,
     topic: Option<&str>,
@@ -246,7 +266,7 @@ fn topic_exists(
             path,
             None,
             format!(
-                "no LaserScan on topic {t:?} (LaserScan topics: {})",
+                "no LaserScan or MultiEchoLaserScan on topic {t:?} (scan topics: {})",
                 if scan_topics.is_empty() {
                     "none".to_string()
                 } else {
@@ -458,12 +478,13 @@ fn mcap_file_messages(
 pub struct RosMotion {
     /// Each `nav_msgs/Odometry` topic's messages.
     pub odometry: BTreeMap<String, OdometryTrack>,
-    /// The `frame_id` of the first LaserScan (of the topic asked for), without
-    /// a leading `/`.
+    /// The `frame_id` of the first scan message (of the topic asked for),
+    /// without a leading `/`.
     pub scan_frame: Option<String>,
     /// Every transform on `/tf_static`.
     pub static_transforms: Vec<crate::FrameTransform>,
-    /// Every LaserScan topic of the log (whatever topic was asked for).
+    /// Every LaserScan and MultiEchoLaserScan topic of the log (whatever
+    /// topic was asked for).
     pub scan_topics: BTreeSet<String>,
     /// Every transform on `/tf`, in the file's order, each with the number
     /// of its message: where a log keeps its odometry when it has no
@@ -483,12 +504,12 @@ pub struct OdometryTrack {
 }
 
 /// The `nav_msgs/Odometry` of a ROS log (ROS 1 bag, ROS 2 bag or MCAP) by
-/// topic, the frame of its LaserScans (of `scan_topic` when given), its
-/// LaserScan topics, and its `/tf_static` and `/tf` transforms, in one pass
-/// over the log: what `pcaline map` needs to use the odometry as the source
-/// and place the LIDAR on the vehicle. Another format, or a log without
-/// them, gives them empty. Errors name the file and the
-/// message; a pose or stamp that is not finite, or beyond
+/// topic, the frame of its scans (of `scan_topic` when given), its scan
+/// topics (LaserScan and MultiEchoLaserScan), and its `/tf_static` and
+/// `/tf` transforms, in one pass over the log: what `pcaline map` needs to
+/// use the odometry as the source and place the LIDAR on the vehicle.
+/// Another format, or a log without them, gives them empty. Errors name the
+/// file and the message; a pose or stamp that is not finite, or beyond
 /// [`crate::MAX_COORDINATE_M`], is an error as in every reader.
 pub fn read_ros_motion(
     path: &Path,
@@ -508,10 +529,13 @@ pub fn read_ros_motion(
     const ODOMETRY: usize = 0;
     const TRANSFORMS: usize = 1;
     const SCANS: usize = 2;
+    const MULTIECHO_SCANS: usize = 3;
+    let [scans, multiecho] = scan_types(scan_topic);
     let wanted = [
         Wanted { ros1_type: ROS1_ODOMETRY, ros2_type: ROS2_ODOMETRY, topic: None },
         Wanted { ros1_type: ROS1_TF, ros2_type: ROS2_TF, topic: None },
-        Wanted { ros1_type: ROS1_TYPE, ros2_type: ROS2_TYPE, topic: scan_topic },
+        scans,
+        multiecho,
     ];
     let mut pass = messages(path, &wanted, &mut |m| {
         let position = m.position;
@@ -559,7 +583,8 @@ pub fn read_ros_motion(
                     motion.static_transforms.extend(t);
                 }
             }
-            SCANS if motion.scan_frame.is_none() => {
+            // Both scan types begin with the same header.
+            SCANS | MULTIECHO_SCANS if motion.scan_frame.is_none() => {
                 let frame = laserscan_frame(m.data, m.encoding == Encoding::Ros1)
                     .map_err(|e| error("LaserScan", e))?;
                 motion.scan_frame = Some(frame);
@@ -569,6 +594,7 @@ pub fn read_ros_motion(
         Ok(ControlFlow::Continue(()))
     })?;
     motion.scan_topics = std::mem::take(&mut pass.topics[SCANS]);
+    motion.scan_topics.append(&mut pass.topics[MULTIECHO_SCANS]);
     Ok(motion)
 }
 
@@ -782,8 +808,9 @@ mod tests {
         // A topic no LaserScan channel has: an error listing those that exist.
         let e = read_mcap(&path, Some("/nope"), &mut |_| ControlFlow::Continue(())).unwrap_err();
         assert!(
-            e.to_string()
-                .contains("no LaserScan on topic \"/nope\" (LaserScan topics: /other, /scan)"),
+            e.to_string().contains(
+                "no LaserScan or MultiEchoLaserScan on topic \"/nope\" (scan topics: /other, /scan)"
+            ),
             "{e}"
         );
         std::fs::remove_file(&path).unwrap();
@@ -868,5 +895,94 @@ mod tests {
         let motion = read_ros_motion(&path, LogFormat::Mcap, None).unwrap();
         assert_eq!(motion.scan_frame.as_deref(), Some("laser"));
         std::fs::remove_file(&path).unwrap();
+    }
+
+    /// MultiEchoLaserScans (a UTM-30LX-EW's `echoes`) in a ROS 2 bag and
+    /// in MCAP: read as the scans of each beam's first echo, with their
+    /// frame and topic, and a topic asked for is looked for among both
+    /// scan types.
+    #[test]
+    fn multiecho_scans_are_read_as_their_first_echoes() {
+        let dir = std::env::temp_dir().join(format!("pcaline-echoes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let echoes = |k: usize| -> Vec<Vec<f32>> {
+            (0..50).map(|i| if i == 7 { vec![] } else { vec![2.0 + k as f32, 9.0] }).collect()
+        };
+        let data = |k: usize| {
+            crate::encode_multiecho_cdr(
+                -1.0,
+                0.01,
+                0.1,
+                30.0,
+                k as f64 * 0.025,
+                &echoes(k),
+                "laser",
+            )
+        };
+        let mcap_path = dir.join("echoes.mcap");
+        {
+            let file = std::io::BufWriter::new(std::fs::File::create(&mcap_path).unwrap());
+            let mut w = mcap::Writer::new(file).unwrap();
+            let schema = w.add_schema(ROS2_MULTIECHO, "ros2msg", b"").unwrap();
+            let ch = w.add_channel(schema, "/echoes", "cdr", &BTreeMap::new()).unwrap();
+            for k in 0..3 {
+                let header = mcap::records::MessageHeader {
+                    channel_id: ch,
+                    sequence: k as u32,
+                    log_time: k as u64,
+                    publish_time: k as u64,
+                };
+                w.write_to_known_channel(&header, &data(k)).unwrap();
+            }
+            w.finish().unwrap();
+        }
+        let db_path = dir.join("echoes.db3");
+        {
+            let db = rusqlite::Connection::open(&db_path).unwrap();
+            db.execute_batch(
+                "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, \
+                 serialization_format TEXT, offered_qos_profiles TEXT); \
+                 CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, \
+                 timestamp INTEGER, data BLOB);",
+            )
+            .unwrap();
+            db.execute(
+                "INSERT INTO topics VALUES (1, '/echoes', ?1, 'cdr', '')",
+                rusqlite::params![ROS2_MULTIECHO],
+            )
+            .unwrap();
+            for k in 0..3 {
+                db.execute(
+                    "INSERT INTO messages VALUES (?1, 1, ?2, ?3)",
+                    rusqlite::params![k as i64 + 1, k as i64, data(k)],
+                )
+                .unwrap();
+            }
+        }
+        for (path, format) in [(&mcap_path, LogFormat::Mcap), (&db_path, LogFormat::Ros2Bag)] {
+            let options = crate::LogOptions { format: Some(format), ..Default::default() };
+            let mut got = Vec::new();
+            crate::read_log(path, &options, |r| {
+                if let LogRecord::Scan(s) = r {
+                    got.push(s.scan);
+                }
+                ControlFlow::Continue(())
+            })
+            .unwrap();
+            assert_eq!(got.len(), 3, "{format:?}");
+            for (k, scan) in got.iter().enumerate() {
+                assert_eq!(scan.ranges[0], 2.0 + k as f32, "{format:?}");
+                assert!(scan.ranges[7].is_nan(), "{format:?}: a beam without echo");
+            }
+            let motion = read_ros_motion(path, format, None).unwrap();
+            assert_eq!(motion.scan_frame.as_deref(), Some("laser"));
+            assert_eq!(motion.scan_topics.iter().collect::<Vec<_>>(), ["/echoes"]);
+            let topic = crate::LogOptions { topic: Some("/echoes".into()), ..options.clone() };
+            assert!(crate::read_log(path, &topic, |_| ControlFlow::Continue(())).is_ok());
+            let wrong = crate::LogOptions { topic: Some("/scan".into()), ..options };
+            let e = crate::read_log(path, &wrong, |_| ControlFlow::Continue(())).unwrap_err();
+            assert!(e.to_string().contains("topics: /echoes"), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
