@@ -12,16 +12,17 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 /// The temporary files of every [`AtomicFile`] not yet committed or
-/// dropped, for [`remove_temporary_files`].
+/// dropped, and of every compressed ROS 2 bag file being read, for
+/// [`remove_temporary_files`].
 static TEMPORARY: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-fn register(tmp: &Path) {
+pub(crate) fn register(tmp: &Path) {
     if let Ok(mut t) = TEMPORARY.lock() {
         t.push(tmp.to_path_buf());
     }
 }
 
-fn unregister(tmp: &Path) {
+pub(crate) fn unregister(tmp: &Path) {
     if let Ok(mut t) = TEMPORARY.lock() {
         t.retain(|p| p != tmp);
     }

@@ -92,6 +92,9 @@ impl LogFormat {
                 LogFormat::Ros2Bag
             });
         }
+        if crate::ros::is_compressed_db3(path) {
+            return Ok(LogFormat::Ros2Bag);
+        }
         let ext =
             path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
         match ext.as_str() {

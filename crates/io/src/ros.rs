@@ -323,17 +323,105 @@ pub fn read_ros2_bag(
     read_scans(path, topic, visit, ros2_messages, "message id")
 }
 
-/// The wanted messages of a ROS 2 bag, file by file in message id order.
+/// The first bytes of a zstd frame. A CDR message starts with its
+/// encapsulation header (`00 01 00 00` or `00 00 00 00`), never with these.
+const ZSTD_MAGIC: [u8; 4] = [0x28, 0xB5, 0x2F, 0xFD];
+
+/// A compressed message that decompresses to more than this is refused
+/// (a corrupt or hostile frame must not fill the memory), bytes.
+const MAX_MESSAGE_BYTES: u64 = 1 << 28;
+
+/// A message as stored, or decompressed when rosbag2 compressed it
+/// (`--compression-mode message --compression-format zstd`).
+fn message_bytes(data: &[u8]) -> Result<std::borrow::Cow<'_, [u8]>, String> {
+    use std::io::Read;
+    if !data.starts_with(&ZSTD_MAGIC) {
+        return Ok(std::borrow::Cow::Borrowed(data));
+    }
+    let mut out = Vec::new();
+    zstd::stream::read::Decoder::new(data)
+        .and_then(|d| d.take(MAX_MESSAGE_BYTES + 1).read_to_end(&mut out))
+        .map_err(|e| format!("zstd: {e}"))?;
+    if out.len() as u64 > MAX_MESSAGE_BYTES {
+        return Err(format!("zstd: decompresses to more than {MAX_MESSAGE_BYTES} bytes"));
+    }
+    Ok(std::borrow::Cow::Owned(out))
+}
+
+/// A ROS 2 bag file ready for SQLite: the file itself, or, for a file
+/// rosbag2 compressed whole (`.db3.zstd`, `--compression-mode file`), a
+/// temporary copy decompressed beside the system's other temporary files,
+/// removed when this is dropped (and by [`crate::remove_temporary_files`]
+/// on an interrupt).
+struct Db3File {
+    path: std::path::PathBuf,
+    temporary: bool,
+}
+
+impl Db3File {
+    fn open(file: &Path) -> Result<Self, IoError> {
+        if !is_compressed_db3(file) {
+            return Ok(Db3File { path: file.to_path_buf(), temporary: false });
+        }
+        static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let k = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let name = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let path = std::env::temp_dir().join(format!("pcaline-{}-{k}-{name}", std::process::id()));
+        crate::atomic::register(&path);
+        let out = Db3File { path, temporary: true };
+        let input = std::fs::File::open(file).map_err(|e| IoError::io(file, e))?;
+        let mut output = std::fs::File::create(&out.path).map_err(|e| IoError::io(&out.path, e))?;
+        zstd::stream::copy_decode(input, &mut output)
+            .map_err(|e| IoError::parse(file, None, format!("zstd: {e}")))?;
+        Ok(out)
+    }
+}
+
+impl Drop for Db3File {
+    fn drop(&mut self) {
+        if self.temporary {
+            let _ = std::fs::remove_file(&self.path);
+            crate::atomic::unregister(&self.path);
+        }
+    }
+}
+
+/// A file rosbag2 compressed whole: `*.db3.zstd`.
+pub(crate) fn is_compressed_db3(file: &Path) -> bool {
+    let name = file.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase());
+    name.is_some_and(|n| n.ends_with(".db3.zstd"))
+}
+
+/// The wanted messages of a ROS 2 bag, file by file in message id order;
+/// rosbag2's zstd compression, of whole files or of each message, is
+/// undone.
 fn ros2_messages(
     path: &Path,
     wanted: &[Wanted<'_>],
     visit: &mut Visit<'_>,
 ) -> Result<Pass, IoError> {
     let mut pass = Pass::new(wanted);
-    for file in bag_files(path, "db3")? {
+    let files = if path.is_dir() {
+        let mut files = files_with_extension(path, "db3")?;
+        let compressed = files_with_extension(path, "zstd")?;
+        files.extend(compressed.into_iter().filter(|f| is_compressed_db3(f)));
+        files.sort();
+        if files.is_empty() {
+            return Err(IoError::parse(
+                path,
+                None,
+                "a bag directory without .db3 or .db3.zstd files",
+            ));
+        }
+        files
+    } else {
+        vec![path.to_path_buf()]
+    };
+    for file in files {
         let sql = |e: rusqlite::Error| IoError::parse(&file, None, format!("sqlite: {e}"));
+        let db_file = Db3File::open(&file)?;
         let db = rusqlite::Connection::open_with_flags(
-            &file,
+            &db_file.path,
             rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY,
         )
         .map_err(sql)?;
@@ -378,6 +466,8 @@ fn ros2_messages(
             for (id, topic_id, data) in rows {
                 last = id;
                 let Some((topic, kind)) = taken.get(&topic_id) else { continue };
+                let data = message_bytes(&data)
+                    .map_err(|e| IoError::parse(&file, None, format!("message id {id}: {e}")))?;
                 let message = Message {
                     file: &file,
                     topic,
@@ -983,6 +1073,86 @@ mod tests {
             let e = crate::read_log(path, &wrong, |_| ControlFlow::Continue(())).unwrap_err();
             assert!(e.to_string().contains("topics: /echoes"), "{e}");
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A ROS 2 bag as rosbag2 compresses it with zstd, each message or the
+    /// whole file (`.db3.zstd`, alone or in a bag folder): the same scans
+    /// as uncompressed, the temporary decompressed copy removed after the
+    /// read, and a corrupt compressed message an error naming its id.
+    #[test]
+    fn zstd_compressed_ros2_bags_read_as_uncompressed() {
+        let dir = std::env::temp_dir().join(format!("pcaline-zstd-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let scans: Vec<Scan> = (0..3)
+            .map(|k| {
+                Scan::new(-1.0, 0.01, 0.1, 30.0, vec![1.0 + k as f32; 40]).with_stamp(k as f64)
+            })
+            .collect();
+        let write_db = |path: &Path, compress: bool| {
+            let db = rusqlite::Connection::open(path).unwrap();
+            db.execute_batch(
+                "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, \
+                 serialization_format TEXT, offered_qos_profiles TEXT); \
+                 CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, \
+                 timestamp INTEGER, data BLOB);",
+            )
+            .unwrap();
+            db.execute(
+                "INSERT INTO topics VALUES (1, '/scan', ?1, 'cdr', '')",
+                rusqlite::params![ROS2_TYPE],
+            )
+            .unwrap();
+            for (k, scan) in scans.iter().enumerate() {
+                let mut data = encode_laserscan_cdr(scan, "laser");
+                if compress {
+                    data = zstd::stream::encode_all(&data[..], 3).unwrap();
+                    assert!(data.starts_with(&ZSTD_MAGIC));
+                }
+                db.execute(
+                    "INSERT INTO messages VALUES (?1, 1, ?2, ?3)",
+                    rusqlite::params![k as i64 + 1, k as i64, data],
+                )
+                .unwrap();
+            }
+        };
+        let read = |path: &Path| -> Result<Vec<Vec<f32>>, IoError> {
+            let mut got = Vec::new();
+            read_ros2_bag(path, None, &mut |r| {
+                if let LogRecord::Scan(s) = r {
+                    got.push(s.scan.ranges);
+                }
+                ControlFlow::Continue(())
+            })?;
+            Ok(got)
+        };
+        let want: Vec<Vec<f32>> = scans.iter().map(|s| s.ranges.clone()).collect();
+        let per_message = dir.join("per_message.db3");
+        write_db(&per_message, true);
+        assert_eq!(read(&per_message).unwrap(), want);
+        let plain = dir.join("plain.db3");
+        write_db(&plain, false);
+        let folder = dir.join("bag");
+        std::fs::create_dir_all(&folder).unwrap();
+        let whole = folder.join("bag_0.db3.zstd");
+        let bytes = zstd::stream::encode_all(&std::fs::read(&plain).unwrap()[..], 3).unwrap();
+        std::fs::write(&whole, bytes).unwrap();
+        assert_eq!(LogFormat::detect(&whole).unwrap(), LogFormat::Ros2Bag);
+        assert_eq!(LogFormat::detect(&folder).unwrap(), LogFormat::Ros2Bag);
+        assert_eq!(read(&whole).unwrap(), want);
+        assert_eq!(read(&folder).unwrap(), want);
+        let leftovers = std::fs::read_dir(std::env::temp_dir())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with("-bag_0.db3"))
+            .count();
+        assert_eq!(leftovers, 0, "the decompressed copy stays behind");
+        // A compressed message cut short: an error naming it.
+        let db = rusqlite::Connection::open(&per_message).unwrap();
+        db.execute("UPDATE messages SET data = substr(data, 1, 12) WHERE id = 2", []).unwrap();
+        drop(db);
+        let e = read(&per_message).unwrap_err().to_string();
+        assert!(e.contains("message id 2") && e.contains("zstd"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
