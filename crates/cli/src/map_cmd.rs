@@ -340,9 +340,9 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     let mut options = args.input.options()?;
     // Whether a CARMEN log's scans are its RAWLASER1 lines, decided once for
     // every read below.
-    let carmen = options.format.map_or_else(|| pcaline_io::LogFormat::detect(&args.log), Ok)?
-        == pcaline_io::LogFormat::Carmen;
-    if carmen {
+    if options.format.map_or_else(|| pcaline_io::LogFormat::detect(&args.log), Ok)?
+        == pcaline_io::LogFormat::Carmen
+    {
         options.carmen = options.carmen.decided_for(&args.log)?;
     }
     let odometry = log_odometry(&args.log, &options, args.odom_topic.as_deref())?;
@@ -408,23 +408,26 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
                 }
                 m
             }
-            // Scans without a pose (RAWLASER1): the log's PARAM lines.
-            None if carmen => match pcaline_io::front_laser_params(&args.log)? {
-                Some(m) => {
-                    if !quiet {
-                        eprintln!(
-                            "{log}: its PARAM lines put the front laser {:.3} m forward, {:.3} m \
-                             left and {:.2}° turned on the robot: taken as the LIDAR's mount \
-                             (--mount overrides)",
-                            m.x(),
-                            m.y(),
-                            m.heading().to_degrees()
-                        );
+            // Scans without a pose (RAWLASER1, the motion in ODOM lines):
+            // the log's PARAM lines.
+            None if matches!(odometry, LogOdometry::CarmenOdom(_)) => {
+                match pcaline_io::front_laser_params(&args.log)? {
+                    Some(m) => {
+                        if !quiet {
+                            eprintln!(
+                                "{log}: its PARAM lines put the front laser {:.3} m forward, \
+                                 {:.3} m left and {:.2}° turned on the robot: taken as the \
+                                 LIDAR's mount (--mount overrides)",
+                                m.x(),
+                                m.y(),
+                                m.heading().to_degrees()
+                            );
+                        }
+                        m
                     }
-                    m
+                    None => Pose2::identity(),
                 }
-                None => Pose2::identity(),
-            },
+            }
             None => Pose2::identity(),
         },
     };

@@ -121,20 +121,12 @@ pub fn encode_multiecho_cdr(
     echoes: &[Vec<f32>],
     frame_id: &str,
 ) -> Vec<u8> {
-    let mut out = vec![0u8, 1, 0, 0];
-    let sec = stamp_s.floor();
-    out.extend_from_slice(&(sec as i32).to_le_bytes());
-    out.extend_from_slice(&(((stamp_s - sec) * 1e9).round() as u32).to_le_bytes());
-    out.extend_from_slice(&(frame_id.len() as u32 + 1).to_le_bytes());
-    out.extend_from_slice(frame_id.as_bytes());
-    out.push(0);
-    while !(out.len() - 4).is_multiple_of(4) {
-        out.push(0);
-    }
-    let angle_max = angle_min + angle_increment * echoes.len().saturating_sub(1) as f32;
-    for v in [angle_min, angle_max, angle_increment, 0.0, 0.0, range_min, range_max] {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
+    let mut out = encode_scan_fields(
+        stamp_s,
+        frame_id,
+        [angle_min, angle_increment, range_min, range_max],
+        echoes.len(),
+    );
     out.extend_from_slice(&(echoes.len() as u32).to_le_bytes());
     for beam in echoes {
         out.extend_from_slice(&(beam.len() as u32).to_le_bytes());
@@ -146,29 +138,40 @@ pub fn encode_multiecho_cdr(
     out
 }
 
-/// Encodes a scan as a little-endian CDR `sensor_msgs/msg/LaserScan`.
-pub fn encode_laserscan_cdr(scan: &Scan, frame_id: &str) -> Vec<u8> {
+/// The encapsulation header, the message header and the seven float32
+/// fields that LaserScan and MultiEchoLaserScan share, in little-endian CDR,
+/// for a scan of `beams` beams (no time increment or scan time).
+fn encode_scan_fields(
+    stamp_s: f64,
+    frame_id: &str,
+    [angle_min, angle_increment, range_min, range_max]: [f32; 4],
+    beams: usize,
+) -> Vec<u8> {
     let mut out = vec![0u8, 1, 0, 0];
-    let pad = |out: &mut Vec<u8>, n: usize| {
-        while !(out.len() - 4).is_multiple_of(n) {
-            out.push(0);
-        }
-    };
-    let stamp = scan.stamp_s.unwrap_or(0.0);
-    let sec = stamp.floor();
+    let sec = stamp_s.floor();
     out.extend_from_slice(&(sec as i32).to_le_bytes());
-    out.extend_from_slice(&(((stamp - sec) * 1e9).round() as u32).to_le_bytes());
+    out.extend_from_slice(&(((stamp_s - sec) * 1e9).round() as u32).to_le_bytes());
     out.extend_from_slice(&(frame_id.len() as u32 + 1).to_le_bytes());
     out.extend_from_slice(frame_id.as_bytes());
     out.push(0);
-    pad(&mut out, 4);
-    let n = scan.ranges.len();
-    let angle_max = scan.angle_min + scan.angle_increment * n.saturating_sub(1) as f32;
-    for v in
-        [scan.angle_min, angle_max, scan.angle_increment, 0.0, 0.0, scan.range_min, scan.range_max]
-    {
+    while !(out.len() - 4).is_multiple_of(4) {
+        out.push(0);
+    }
+    let angle_max = angle_min + angle_increment * beams.saturating_sub(1) as f32;
+    for v in [angle_min, angle_max, angle_increment, 0.0, 0.0, range_min, range_max] {
         out.extend_from_slice(&v.to_le_bytes());
     }
+    out
+}
+
+/// Encodes a scan as a little-endian CDR `sensor_msgs/msg/LaserScan`.
+pub fn encode_laserscan_cdr(scan: &Scan, frame_id: &str) -> Vec<u8> {
+    let mut out = encode_scan_fields(
+        scan.stamp_s.unwrap_or(0.0),
+        frame_id,
+        [scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max],
+        scan.ranges.len(),
+    );
     for seq in [&scan.ranges[..], scan.intensities.as_deref().unwrap_or(&[])] {
         out.extend_from_slice(&(seq.len() as u32).to_le_bytes());
         for v in seq {

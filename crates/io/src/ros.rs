@@ -280,21 +280,33 @@ fn topic_exists(
 
 /// The files of a bag: the file itself, or the files of a bag directory
 /// (ROS 2 writes a directory of `.db3` or `.mcap` files, split by size or
-/// time) with the extension `ext`, in name order.
-fn bag_files(path: &Path, ext: &str) -> Result<Vec<std::path::PathBuf>, IoError> {
-    if path.is_dir() {
-        let files = files_with_extension(path, ext)?;
-        if files.is_empty() {
-            return Err(IoError::parse(
-                path,
-                None,
-                format!("a bag directory without .{ext} files"),
-            ));
-        }
-        Ok(files)
-    } else {
-        Ok(vec![path.to_path_buf()])
+/// time) whose names end with one of `suffixes` (case-insensitive), in
+/// name order.
+fn bag_files(path: &Path, suffixes: &[&str]) -> Result<Vec<std::path::PathBuf>, IoError> {
+    if !path.is_dir() {
+        return Ok(vec![path.to_path_buf()]);
     }
+    let mut files: Vec<_> = std::fs::read_dir(path)
+        .map_err(|e| IoError::io(path, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && suffixes.iter().any(|s| has_suffix(p, s)))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(IoError::parse(
+            path,
+            None,
+            format!("a bag directory without {} files", suffixes.join(" or ")),
+        ));
+    }
+    Ok(files)
+}
+
+/// Whether the name of `file` ends with `suffix` (such as `.db3.zstd`),
+/// case-insensitive.
+fn has_suffix(file: &Path, suffix: &str) -> bool {
+    let name = file.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase());
+    name.is_some_and(|n| n.ends_with(suffix))
 }
 
 /// The files of the directory `dir` whose extension is `ext`
@@ -388,8 +400,7 @@ impl Drop for Db3File {
 
 /// A file rosbag2 compressed whole: `*.db3.zstd`.
 pub(crate) fn is_compressed_db3(file: &Path) -> bool {
-    let name = file.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase());
-    name.is_some_and(|n| n.ends_with(".db3.zstd"))
+    has_suffix(file, ".db3.zstd")
 }
 
 /// The wanted messages of a ROS 2 bag, file by file in message id order;
@@ -401,23 +412,7 @@ fn ros2_messages(
     visit: &mut Visit<'_>,
 ) -> Result<Pass, IoError> {
     let mut pass = Pass::new(wanted);
-    let files = if path.is_dir() {
-        let mut files = files_with_extension(path, "db3")?;
-        let compressed = files_with_extension(path, "zstd")?;
-        files.extend(compressed.into_iter().filter(|f| is_compressed_db3(f)));
-        files.sort();
-        if files.is_empty() {
-            return Err(IoError::parse(
-                path,
-                None,
-                "a bag directory without .db3 or .db3.zstd files",
-            ));
-        }
-        files
-    } else {
-        vec![path.to_path_buf()]
-    };
-    for file in files {
+    for file in bag_files(path, &[".db3", ".db3.zstd"])? {
         let sql = |e: rusqlite::Error| IoError::parse(&file, None, format!("sqlite: {e}"));
         let db_file = Db3File::open(&file)?;
         let db = rusqlite::Connection::open_with_flags(
@@ -503,7 +498,7 @@ fn mcap_messages(
     visit: &mut Visit<'_>,
 ) -> Result<Pass, IoError> {
     let mut pass = Pass::new(wanted);
-    for file in bag_files(path, "mcap")? {
+    for file in bag_files(path, &[".mcap"])? {
         mcap_file_messages(&file, wanted, visit, &mut pass)?;
         if pass.stopped {
             break;
@@ -695,6 +690,35 @@ mod tests {
     use pcaline_geometry::Scan;
     use std::collections::BTreeMap;
 
+    /// A ROS 2 bag of rosbag2's tables: `topics` (name, type) with ids from
+    /// 1, and `messages` (topic name, CDR data) with ids and timestamps in
+    /// order.
+    fn write_ros2_bag(path: &Path, topics: &[(&str, &str)], messages: &[(&str, Vec<u8>)]) {
+        let db = rusqlite::Connection::open(path).unwrap();
+        db.execute_batch(
+            "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, \
+             serialization_format TEXT, offered_qos_profiles TEXT); \
+             CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, \
+             timestamp INTEGER, data BLOB);",
+        )
+        .unwrap();
+        for (id, (name, ty)) in topics.iter().enumerate() {
+            db.execute(
+                "INSERT INTO topics VALUES (?1, ?2, ?3, 'cdr', '')",
+                rusqlite::params![id as i64 + 1, name, ty],
+            )
+            .unwrap();
+        }
+        for (k, (topic, data)) in messages.iter().enumerate() {
+            let topic_id = topics.iter().position(|(name, _)| name == topic).unwrap() as i64 + 1;
+            db.execute(
+                "INSERT INTO messages VALUES (?1, ?2, ?3, ?4)",
+                rusqlite::params![k as i64 + 1, topic_id, k as i64, data],
+            )
+            .unwrap();
+        }
+    }
+
     /// Odometry of two topics beside the scans and a static transform, in an
     /// MCAP file and a ROS 2 bag: each topic's poses come back in order
     /// with its vehicle frame, the scans' frame and the transform too, and
@@ -752,42 +776,13 @@ mod tests {
         }
         // ROS 2 bag: the rosbag2 tables.
         let db_path = dir.join("odom.db3");
-        {
-            let db = rusqlite::Connection::open(&db_path).unwrap();
-            db.execute_batch(
-                "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, \
-                 serialization_format TEXT, offered_qos_profiles TEXT); \
-                 CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, \
-                 timestamp INTEGER, data BLOB);",
-            )
-            .unwrap();
-            let topics = [
-                ("/odom", ROS2_ODOMETRY),
-                ("/wheel", ROS2_ODOMETRY),
-                ("/scan", ROS2_TYPE),
-                ("/tf_static", ROS2_TF),
-            ];
-            for (id, (name, ty)) in topics.iter().enumerate() {
-                db.execute(
-                    "INSERT INTO topics VALUES (?1, ?2, ?3, 'cdr', '')",
-                    rusqlite::params![id as i64 + 1, name, ty],
-                )
-                .unwrap();
-            }
-            for (k, (topic, data)) in messages.iter().enumerate() {
-                let topic_id = match *topic {
-                    "/odom" => 1,
-                    "/wheel" => 2,
-                    "/scan" => 3,
-                    _ => 4,
-                };
-                db.execute(
-                    "INSERT INTO messages VALUES (?1, ?2, ?3, ?4)",
-                    rusqlite::params![k as i64 + 1, topic_id, k as i64, data],
-                )
-                .unwrap();
-            }
-        }
+        let topics = [
+            ("/odom", ROS2_ODOMETRY),
+            ("/wheel", ROS2_ODOMETRY),
+            ("/scan", ROS2_TYPE),
+            ("/tf_static", ROS2_TF),
+        ];
+        write_ros2_bag(&db_path, &topics, &messages);
         for (path, format) in [(&mcap_path, LogFormat::Mcap), (&db_path, LogFormat::Ros2Bag)] {
             let motion = read_ros_motion(path, format, None).unwrap();
             let tracks = &motion.odometry;
@@ -1027,28 +1022,8 @@ mod tests {
             w.finish().unwrap();
         }
         let db_path = dir.join("echoes.db3");
-        {
-            let db = rusqlite::Connection::open(&db_path).unwrap();
-            db.execute_batch(
-                "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, \
-                 serialization_format TEXT, offered_qos_profiles TEXT); \
-                 CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, \
-                 timestamp INTEGER, data BLOB);",
-            )
-            .unwrap();
-            db.execute(
-                "INSERT INTO topics VALUES (1, '/echoes', ?1, 'cdr', '')",
-                rusqlite::params![ROS2_MULTIECHO],
-            )
-            .unwrap();
-            for k in 0..3 {
-                db.execute(
-                    "INSERT INTO messages VALUES (?1, 1, ?2, ?3)",
-                    rusqlite::params![k as i64 + 1, k as i64, data(k)],
-                )
-                .unwrap();
-            }
-        }
+        let messages: Vec<(&str, Vec<u8>)> = (0..3).map(|k| ("/echoes", data(k))).collect();
+        write_ros2_bag(&db_path, &[("/echoes", ROS2_MULTIECHO)], &messages);
         for (path, format) in [(&mcap_path, LogFormat::Mcap), (&db_path, LogFormat::Ros2Bag)] {
             let options = crate::LogOptions { format: Some(format), ..Default::default() };
             let mut got = Vec::new();
@@ -1090,31 +1065,19 @@ mod tests {
             })
             .collect();
         let write_db = |path: &Path, compress: bool| {
-            let db = rusqlite::Connection::open(path).unwrap();
-            db.execute_batch(
-                "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, \
-                 serialization_format TEXT, offered_qos_profiles TEXT); \
-                 CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, \
-                 timestamp INTEGER, data BLOB);",
-            )
-            .unwrap();
-            db.execute(
-                "INSERT INTO topics VALUES (1, '/scan', ?1, 'cdr', '')",
-                rusqlite::params![ROS2_TYPE],
-            )
-            .unwrap();
-            for (k, scan) in scans.iter().enumerate() {
-                let mut data = encode_laserscan_cdr(scan, "laser");
-                if compress {
-                    data = zstd::stream::encode_all(&data[..], 3).unwrap();
+            let messages: Vec<(&str, Vec<u8>)> = scans
+                .iter()
+                .map(|scan| {
+                    let data = encode_laserscan_cdr(scan, "laser");
+                    if !compress {
+                        return ("/scan", data);
+                    }
+                    let data = zstd::stream::encode_all(&data[..], 3).unwrap();
                     assert!(data.starts_with(&ZSTD_MAGIC));
-                }
-                db.execute(
-                    "INSERT INTO messages VALUES (?1, 1, ?2, ?3)",
-                    rusqlite::params![k as i64 + 1, k as i64, data],
-                )
-                .unwrap();
-            }
+                    ("/scan", data)
+                })
+                .collect();
+            write_ros2_bag(path, &[("/scan", ROS2_TYPE)], &messages);
         };
         let read = |path: &Path| -> Result<Vec<Vec<f32>>, IoError> {
             let mut got = Vec::new();
