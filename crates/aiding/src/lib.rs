@@ -35,6 +35,7 @@ mod line_measurement;
 mod localizer;
 mod loop_closure;
 mod motion_noise;
+mod place_descriptor;
 mod pose_graph;
 mod pose_update;
 mod pose_window;
@@ -51,9 +52,13 @@ pub use line_alignment::{
 pub use line_measurement::{LineMeasurement, MeasurementNoise, measure};
 pub use localizer::Localizer;
 pub use loop_closure::{
-    Keyframe, LoopClosing, LoopClosureConfig, LoopOutcome, LoopRecord, LoopStep, OptimizeSchedule,
+    Keyframe, LoopClosing, LoopClosureConfig, LoopOutcome, LoopRecord, LoopSearch, LoopStep,
+    OptimizeSchedule,
 };
 pub use motion_noise::{MotionNoise, predict};
+pub use place_descriptor::{
+    PlaceDescriptor, PlaceRecognitionConfig, SEPARATION_BIN_M, SEPARATION_BINS,
+};
 pub use pose_graph::{
     EdgeKind, NotOptimized, OptimizeReport, OptimizerConfig, PoseEdge, PoseGraph,
 };

@@ -14,7 +14,11 @@
 //!    relative pose's uncertainty: the sequential edges' covariances summed
 //!    along the chain between them, heading error times the travel for the
 //!    position, [`LoopClosureConfig::search_sigmas`] standard deviations
-//!    (bounded by [`LoopClosureConfig::max_search_radius_m`]).
+//!    (bounded by [`LoopClosureConfig::max_search_radius_m`]). Where that
+//!    uncertainty reaches beyond the bound, place recognition
+//!    ([`LoopClosureConfig::place_recognition`]) adds the older keyframes
+//!    beyond it, within the uncertainty, whose local line sets look alike
+//!    ([`PlaceDescriptor`]).
 //! 2. **Verification**: the lines of the last keyframes, in the current
 //!    keyframe's frame, are aligned to the lines around the candidate
 //!    ([`align_lines`]: RANSAC over line pairs, then least squares), and the
@@ -37,8 +41,8 @@
 
 use crate::{
     Aiding, AidingConfig, Alignment, AlignmentConfig, AlignmentPrior, EdgeKind, Fallback,
-    ObservedLine, OptimizeReport, OptimizerConfig, PoseGraph, SensorLine, StepReport, align_lines,
-    see_through_fraction,
+    ObservedLine, OptimizeReport, OptimizerConfig, PlaceDescriptor, PlaceRecognitionConfig,
+    PoseGraph, SensorLine, StepReport, align_lines, see_through_fraction,
 };
 
 /// A sample closer than this to a crossing wall is not seeing through it
@@ -149,6 +153,18 @@ pub struct LoopClosureConfig {
     /// 12 drift cells); and `pcaline map` takes up to 8x as long
     /// (`docs/accuracy.md`).
     pub place_search_scale: f64,
+    /// Place recognition ([`PlaceRecognitionConfig`]): where the relative
+    /// pose's uncertainty reaches beyond `max_search_radius_m`, older
+    /// keyframes beyond it but within the uncertainty whose local line sets
+    /// look alike ([`PlaceDescriptor`]) are verified too, aligned anywhere
+    /// within the uncertainty; and a loop is refused when two verified
+    /// candidates place the current keyframe in different places
+    /// ([`LoopOutcome::LookAlikePlace`]). On by default: on MIT CSAIL's raw
+    /// odometry the heading over the whole log is about 2° better on
+    /// average and the position two to three times (`docs/accuracy.md`);
+    /// `None` turns it off.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub place_recognition: Option<PlaceRecognitionConfig>,
     /// The sequential edges' covariance: the estimator's motion model over
     /// the motion between the keyframes, at the noise scale the estimator
     /// adapted to the source ([`StepReport::motion_noise_scale`]), times this.
@@ -168,7 +184,8 @@ pub struct LoopClosureConfig {
 impl LoopClosureConfig {
     /// Defaults for indoor logs: a keyframe each 0.5 m or 15°, local sets of
     /// 5 keyframes, loops at least 8 m of travel back within 1 m and 10° plus
-    /// 3 sigmas of the chain's uncertainty (at most 8 m), a consistency test of 3 m of
+    /// 3 sigmas of the chain's uncertainty (at most 8 m; beyond, by place
+    /// recognition, [`PlaceRecognitionConfig::standard`]), a consistency test of 3 m of
     /// wall, 40% of the current lines, 1 m in the weakest direction and 4 cm
     /// rms; loop edges no tighter than 5 cm and 0.5°.
     pub fn standard() -> Self {
@@ -193,6 +210,7 @@ impl LoopClosureConfig {
             max_runner_up: 0.7,
             max_see_through: 0.5,
             place_search_scale: 0.0,
+            place_recognition: Some(PlaceRecognitionConfig::standard()),
             sequential_variance_scale: 1.0,
             loop_floor_m: 0.05,
             loop_floor_rad: 0.5f64.to_radians(),
@@ -274,6 +292,9 @@ impl LoopClosureConfig {
             0.0,
             "must be >= 1",
         )?;
+        if let Some(p) = &self.place_recognition {
+            p.validate("loop_closure.place_recognition")?;
+        }
         self.alignment.validate("loop_closure.alignment")?;
         self.optimizer.validate("loop_closure.optimizer")
     }
@@ -301,6 +322,32 @@ pub struct Keyframe {
     pub chain_position_var: f64,
     /// The scan's lines, sensor frame.
     pub lines: Vec<SensorLine>,
+    /// The descriptor of its local line set (this keyframe's lines and the
+    /// `submap_keyframes` before it, in its frame), with place recognition
+    /// on and enough lines.
+    pub descriptor: Option<PlaceDescriptor>,
+}
+
+/// How a loop candidate was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[non_exhaustive]
+pub enum LoopSearch {
+    /// Within the local search radius around the predicted relative pose.
+    Local,
+    /// Beyond it, within the relative pose's uncertainty, by the likeness
+    /// of the two local line sets ([`PlaceRecognitionConfig`]).
+    PlaceRecognition,
+}
+
+/// A keyframe to verify as a loop, and the bounds of its alignment.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    keyframe: usize,
+    radius_m: f64,
+    rotation_rad: f64,
+    search: LoopSearch,
 }
 
 /// Why a verified candidate was not used.
@@ -326,7 +373,9 @@ pub enum LoopOutcome {
     Ambiguous,
     /// Verified, but another place within
     /// [`LoopClosureConfig::place_search_scale`] times the search radius
-    /// fits the current lines almost as well: the place repeats.
+    /// fits the current lines almost as well, or, with place recognition,
+    /// another verified candidate places the current keyframe elsewhere:
+    /// the place repeats.
     LookAlikePlace,
     /// Verified, but no second loop from the next keyframes closed the
     /// same cycle ([`LoopClosureConfig::confirm_keyframes`]).
@@ -363,6 +412,8 @@ pub struct LoopRecord {
     /// The alignment's information, unit endpoint noise
     /// ([`Alignment::information`]).
     pub information: Matrix3<f64>,
+    /// How the candidate was found.
+    pub search: LoopSearch,
     /// What came of it.
     pub outcome: LoopOutcome,
 }
@@ -614,7 +665,14 @@ impl LoopClosing {
                 .iter()
                 .map(|l| SensorLine { line: *l.line(), moments: *l.moments() })
                 .collect(),
+            descriptor: None,
         });
+        if let Some(p) = self.config.place_recognition {
+            let first = node.saturating_sub(self.config.submap_keyframes);
+            let local: Vec<LineSegment> =
+                self.local_lines(node, first..=node).into_iter().map(|(l, _)| l).collect();
+            self.keyframes[node].descriptor = PlaceDescriptor::of(&local, p.min_line_m);
+        }
         self.scans.push(Some((node, Pose2::identity())));
         step.keyframe = Some(node);
         if node >= self.quiet_until {
@@ -668,15 +726,17 @@ impl LoopClosing {
     /// Step 1 of loop closing: keyframes at least
     /// [`LoopClosureConfig::min_loop_path_m`] of travel back whose graph
     /// pose lies within the search radius (the relative pose's uncertainty
-    /// along the chain), nearest first, one per stretch of
-    /// `submap_keyframes`, at most `max_candidates`. Returns `(keyframe,
-    /// search radius m, search rotation rad)`.
-    fn loop_candidates(&self, current: usize) -> Vec<(usize, f64, f64)> {
+    /// along the chain, at most `max_search_radius_m`), nearest first, one
+    /// per stretch of `submap_keyframes`, at most `max_candidates`; then,
+    /// with place recognition, the most similar of those beyond the radius
+    /// but within the uncertainty ([`LoopClosing::place_candidates`]).
+    fn loop_candidates(&self, current: usize) -> Vec<Candidate> {
         let c = self.config;
         let here = self.graph.nodes[current];
         let path_here = self.keyframes[current].path_m;
         let kf = &self.keyframes[current];
-        let mut candidates: Vec<(f64, usize, f64, f64)> = (0..current)
+        // (distance, keyframe, uncapped radius, uncapped rotation)
+        let reachable: Vec<(f64, usize, f64, f64)> = (0..current)
             .filter_map(|j| {
                 let old = &self.keyframes[j];
                 let travel = path_here - old.path_m;
@@ -688,52 +748,107 @@ impl LoopClosing {
                 let var_heading = (kf.chain_heading_var - old.chain_heading_var).max(0.0);
                 let var_position = (kf.chain_position_var - old.chain_position_var).max(0.0)
                     + var_heading * travel * travel / 3.0;
-                let radius = (c.search_radius_m + c.search_sigmas * var_position.sqrt())
-                    .min(c.max_search_radius_m);
-                let rotation = (c.search_rotation_rad + c.search_sigmas * var_heading.sqrt())
-                    .min(std::f64::consts::PI);
+                let radius = c.search_radius_m + c.search_sigmas * var_position.sqrt();
+                let rotation = c.search_rotation_rad + c.search_sigmas * var_heading.sqrt();
                 let n = self.graph.nodes[j];
                 let distance = (n.x() - here.x()).hypot(n.y() - here.y());
                 (distance <= radius).then_some((distance, j, radius, rotation))
             })
             .collect();
-        candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut chosen: Vec<(usize, f64, f64)> = Vec::new();
-        for (_, j, radius, rotation) in candidates {
+        let mut local: Vec<(f64, usize, f64, f64)> = reachable
+            .iter()
+            .filter(|(d, _, r, _)| *d <= r.min(c.max_search_radius_m))
+            .copied()
+            .collect();
+        local.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut chosen: Vec<Candidate> = Vec::new();
+        for (_, j, radius, rotation) in local {
             if chosen.len() >= c.max_candidates {
                 break;
             }
-            if chosen.iter().all(|(k, _, _)| k.abs_diff(j) > c.submap_keyframes) {
-                chosen.push((j, radius, rotation));
+            if chosen.iter().all(|k| k.keyframe.abs_diff(j) > c.submap_keyframes) {
+                chosen.push(Candidate {
+                    keyframe: j,
+                    radius_m: radius.min(c.max_search_radius_m),
+                    rotation_rad: rotation.min(std::f64::consts::PI),
+                    search: LoopSearch::Local,
+                });
             }
         }
+        if let Some(p) = c.place_recognition {
+            let far = reachable.into_iter().filter(|(d, _, _, _)| *d > c.max_search_radius_m);
+            self.place_candidates(current, far, &p, &mut chosen);
+        }
         chosen
+    }
+
+    /// Place recognition's candidates, added to `chosen`: of the keyframes
+    /// `far` (beyond the local search, within the relative pose's
+    /// uncertainty: `(distance, keyframe, radius, rotation)`), those whose
+    /// descriptor is at least `min_similarity` like the current one's, the
+    /// most similar first, one per stretch, at most `max_candidates`. Each
+    /// is aligned within its whole uncertainty.
+    fn place_candidates(
+        &self,
+        current: usize,
+        far: impl Iterator<Item = (f64, usize, f64, f64)>,
+        p: &PlaceRecognitionConfig,
+        chosen: &mut Vec<Candidate>,
+    ) {
+        let Some(here) = &self.keyframes[current].descriptor else { return };
+        let mut similar: Vec<(f64, usize, f64, f64)> = far
+            .filter_map(|(_, j, radius, rotation)| {
+                let s = here.similarity(self.keyframes[j].descriptor.as_ref()?);
+                (s >= p.min_similarity).then_some((s, j, radius, rotation))
+            })
+            .collect();
+        similar.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let n = self.config.submap_keyframes;
+        let mut added = 0;
+        for (_, j, radius, rotation) in similar {
+            if added >= p.max_candidates {
+                break;
+            }
+            if chosen.iter().all(|k| k.keyframe.abs_diff(j) > n) {
+                chosen.push(Candidate {
+                    keyframe: j,
+                    radius_m: radius,
+                    rotation_rad: rotation.min(std::f64::consts::PI),
+                    search: LoopSearch::PlaceRecognition,
+                });
+                added += 1;
+            }
+        }
     }
 
     /// Step 2: each candidate's local lines aligned with the current
     /// keyframe's (within the search prior) and tested (matched length,
     /// constrained directions, residual, ambiguity, walls seen through);
     /// the refused ones recorded. Returns the accepted alignment with the
-    /// longest matched length.
+    /// longest matched length. With place recognition, when a candidate it
+    /// found is accepted and another accepted one places the current
+    /// keyframe elsewhere (beyond [`SAME_PLACE_M`] or [`SAME_PLACE_RAD`]),
+    /// none is: the longest is recorded as [`LoopOutcome::LookAlikePlace`].
     fn verify_candidates(
         &mut self,
         current: usize,
-        chosen: Vec<(usize, f64, f64)>,
+        chosen: Vec<Candidate>,
     ) -> Option<VerifiedLoop> {
         let c = self.config;
         let here = self.graph.nodes[current];
         let first = current.saturating_sub(c.submap_keyframes);
         let current_seen = self.local_lines(current, first..=current);
         let current_lines: Vec<LineSegment> = current_seen.iter().map(|(l, _)| *l).collect();
-        let mut best: Option<VerifiedLoop> = None;
-        for (j, radius_m, max_rotation_rad) in chosen {
+        let mut accepted: Vec<VerifiedLoop> = Vec::new();
+        for candidate in chosen {
+            let j = candidate.keyframe;
             let candidate_seen = self.local_lines(j, self.candidate_stretch(j, first));
             let candidate_lines: Vec<LineSegment> =
                 candidate_seen.iter().map(|(l, _)| *l).collect();
             let prior = AlignmentPrior {
                 candidate_from_current: self.graph.nodes[j].between(&here),
-                radius_m,
-                max_rotation_rad,
+                radius_m: candidate.radius_m,
+                max_rotation_rad: candidate.rotation_rad,
             };
             let Some(a) = align_lines(&current_lines, &candidate_lines, Some(&prior), &c.alignment)
             else {
@@ -769,20 +884,52 @@ impl LoopClosing {
                 LoopOutcome::Accepted
             };
             if outcome != LoopOutcome::Accepted {
-                self.loops.push(record(current, j, &a, see_through, outcome));
+                let mut r = record(current, j, &a, see_through, outcome);
+                r.search = candidate.search;
+                self.loops.push(r);
                 continue;
             }
-            if best.as_ref().is_none_or(|b| a.matched_length_m > b.alignment.matched_length_m) {
-                best = Some(VerifiedLoop {
-                    candidate: j,
-                    alignment: a,
-                    see_through,
-                    radius_m,
-                    current_lines: current_lines.clone(),
-                });
+            accepted.push(VerifiedLoop {
+                candidate: j,
+                alignment: a,
+                see_through,
+                radius_m: candidate.radius_m,
+                current_lines: current_lines.clone(),
+                search: candidate.search,
+            });
+        }
+        let best = accepted
+            .iter()
+            .enumerate()
+            .max_by(|(i, a), (k, b)| {
+                // The longest; the first of equals.
+                a.alignment.matched_length_m.total_cmp(&b.alignment.matched_length_m).then(k.cmp(i))
+            })
+            .map(|(i, _)| i)?;
+        let best = accepted.swap_remove(best);
+        let recognised = best.search == LoopSearch::PlaceRecognition
+            || accepted.iter().any(|v| v.search == LoopSearch::PlaceRecognition);
+        if recognised {
+            let placed = |v: &VerifiedLoop| {
+                self.graph.nodes[v.candidate].compose(&v.alignment.candidate_from_current)
+            };
+            let elsewhere = accepted
+                .iter()
+                .filter(|v| {
+                    let d = placed(&best).between(&placed(v));
+                    d.x().hypot(d.y()) > SAME_PLACE_M
+                        || wrap_angle(d.heading()).abs() > SAME_PLACE_RAD
+                })
+                .map(|v| v.alignment.matched_length_m)
+                .fold(0.0f64, f64::max);
+            if elsewhere > 0.0 {
+                let mut r = best.record(current, LoopOutcome::LookAlikePlace);
+                r.other_place_length_m = elsewhere;
+                self.loops.push(r);
+                return None;
             }
         }
-        best
+        Some(best)
     }
 
     /// The keyframes whose lines form the local set around candidate `j`:
@@ -991,6 +1138,7 @@ fn record(
         see_through,
         other_place_length_m: 0.0,
         information: a.information,
+        search: LoopSearch::Local,
         outcome,
     }
 }
@@ -1005,11 +1153,15 @@ struct VerifiedLoop {
     radius_m: f64,
     /// The current keyframe's local lines, its own frame.
     current_lines: Vec<LineSegment>,
+    /// How the candidate was found.
+    search: LoopSearch,
 }
 
 impl VerifiedLoop {
     fn record(&self, keyframe: usize, outcome: LoopOutcome) -> LoopRecord {
-        record(keyframe, self.candidate, &self.alignment, self.see_through, outcome)
+        let mut r = record(keyframe, self.candidate, &self.alignment, self.see_through, outcome);
+        r.search = self.search;
+        r
     }
 }
 
@@ -1141,6 +1293,65 @@ mod tests {
             slam.keyframes().len(),
             slam.keyframes().last().map(|k| k.path_m)
         );
+    }
+
+    /// Laps of one room with a source that slips 0.8 m sideways half-way
+    /// round the second lap, the map built from the source as it is (no
+    /// aiding), and the local search capped at 0.3 m: after the slip the
+    /// first lap lies 0.8 m from where the graph puts it, beyond the cap but
+    /// within the chain's uncertainty. Place recognition finds the loops
+    /// there, the right ones, and the optimization undoes the slip; with it
+    /// off, no loop stands.
+    #[test]
+    fn place_recognition_finds_loops_beyond_the_local_search() {
+        let walls = room(0.0);
+        let truth = laps(0.0, 3);
+        let run = |place_recognition: Option<PlaceRecognitionConfig>| {
+            let mut config = LoopClosureConfig::standard();
+            config.search_radius_m = 0.2;
+            config.max_search_radius_m = 0.3;
+            config.place_recognition = place_recognition;
+            let mut slam =
+                LoopClosing::new(AidingConfig::none(), MapConfig::default(), config).unwrap();
+            for (k, pose) in truth.iter().enumerate() {
+                let slip = if k >= 90 { 0.8 } else { 0.0 };
+                let source = Pose2::new(slip, 0.0, 0.0).compose(pose);
+                slam.step_at(k as f64 * 0.1, &source, &seen(&walls, pose));
+            }
+            slam.optimize();
+            slam
+        };
+        let truth_of = |slam: &LoopClosing, r: &LoopRecord| {
+            let k = |i: usize| truth[slam.keyframes()[i].scan];
+            k(r.candidate).between(&k(r.keyframe))
+        };
+        let off = run(None);
+        let standing = |slam: &LoopClosing| -> Vec<LoopRecord> {
+            slam.loops().iter().filter(|r| r.outcome == LoopOutcome::Accepted).copied().collect()
+        };
+        for r in standing(&off) {
+            // Any loop without place recognition lies before the slip.
+            assert!(off.keyframes()[r.keyframe].scan < 90, "{r:?}");
+        }
+        let on = run(Some(PlaceRecognitionConfig::standard()));
+        let recognised: Vec<LoopRecord> = standing(&on)
+            .into_iter()
+            .filter(|r| r.search == LoopSearch::PlaceRecognition)
+            .collect();
+        assert!(!recognised.is_empty(), "{:#?}", on.loops());
+        for r in &recognised {
+            let error = truth_of(&on, r).between(&r.candidate_from_current);
+            assert!(error.x().hypot(error.y()) < 0.05, "{r:?}");
+        }
+        // The last pose, 0.8 m off in the source, is brought back; without
+        // place recognition it stays off.
+        let last_error = |slam: &LoopClosing| {
+            let last = slam.trajectory().last().copied().flatten().unwrap();
+            let truth_last = truth.last().unwrap();
+            (last.x() - truth_last.x()).hypot(last.y() - truth_last.y())
+        };
+        assert!(last_error(&on) < 0.1, "{} m", last_error(&on));
+        assert!(last_error(&off) > 0.7, "{} m", last_error(&off));
     }
 
     /// Laps in room A, then laps in its twin B, 8 m along: with the place

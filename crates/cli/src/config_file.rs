@@ -387,7 +387,7 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 20] = [
+    const OPTIONAL: [&str; 21] = [
         "map.lifecycle",
         "aiding.estimator.window",
         "aiding.estimator.recovery",
@@ -408,6 +408,7 @@ fn optional_field(path: &str) -> bool {
         "map.max_new_alpha_std_rad",
         "map.merge_gate",
         "detector.segmentation.level2",
+        "loop_closure.place_recognition",
     ];
     OPTIONAL.contains(&path)
 }

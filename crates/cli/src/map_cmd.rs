@@ -11,7 +11,7 @@ use crate::progress;
 use crate::svg::{Mark, Plot};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
-use pcaline::aiding::{AidingMode, EdgeKind, LoopOutcome};
+use pcaline::aiding::{AidingMode, EdgeKind, LoopOutcome, LoopSearch};
 use pcaline::{Mapper, MapperConfig, Pose2};
 use pcaline_io::{OutputSet, PoseKind, ScanRecord, json_bytes, map_csv_text, map_json_bytes};
 use serde::Serialize;
@@ -694,6 +694,11 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
                 rms_m: r.rms_m,
                 see_through: r.see_through,
                 other_place_length_m: r.other_place_length_m,
+                search: match r.search {
+                    LoopSearch::Local => "local",
+                    LoopSearch::PlaceRecognition => "place_recognition",
+                    _ => "other",
+                },
             })
             .collect(),
         optimizations: l.optimizations(),
@@ -749,8 +754,12 @@ struct LoopOut {
     rms_m: f64,
     see_through: f64,
     /// Wall matched by the best alignment with another place nearby
-    /// (`loop_closure.place_search_scale`): a look-alike place.
+    /// (`loop_closure.place_search_scale`), or by another verified
+    /// candidate (`loop_closure.place_recognition`): a look-alike place.
     other_place_length_m: f64,
+    /// How the candidate was found: `local` (within the search radius) or
+    /// `place_recognition` (beyond it, by the likeness of the line sets).
+    search: &'static str,
 }
 
 fn draw(

@@ -144,6 +144,7 @@ mod tests {
             see_through: 0.0,
             other_place_length_m: 0.0,
             information: Matrix3::identity(),
+            search: pcaline_aiding::LoopSearch::Local,
             outcome,
         }
     }
