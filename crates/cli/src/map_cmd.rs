@@ -550,10 +550,14 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             mapper.map().len(),
             sharpness.count(),
             graph.as_ref().map_or(String::new(), |g| format!(
-                ", {} keyframes, {} loops accepted ({} switched off by the optimizer, {} \
-                 candidates refused by the consistency test)",
+                ", {} keyframes, {} loops accepted ({} found by place recognition; {} switched \
+                 off by the optimizer, {} candidates refused by the consistency test)",
                 g.nodes.len(),
                 g.loops.iter().filter(|l| l.outcome == "accepted").count(),
+                g.loops
+                    .iter()
+                    .filter(|l| l.outcome == "accepted" && l.search == "place_recognition")
+                    .count(),
                 g.loops.iter().filter(|l| l.outcome == "switched_off").count(),
                 g.loops
                     .iter()
