@@ -3,7 +3,7 @@
 use crate::exit::BadInput;
 use clap::ValueEnum;
 use pcaline::geometry::SensorProfile;
-use pcaline_io::{LogFormat, LogOptions, LogRecord, read_log};
+use pcaline_io::{Echo, LogFormat, LogOptions, LogRecord, read_log};
 use std::ops::ControlFlow;
 use std::path::Path;
 
@@ -24,6 +24,17 @@ pub enum FormatArg {
     Csv,
 }
 
+/// Which echo of a multi-echo scan, for `--echo`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum EchoArg {
+    /// The nearest return: the first surface the beam met.
+    First,
+    /// The farthest return: past glass, dust, rain or foliage.
+    Last,
+    /// The return of the highest intensity (the first without intensities).
+    Strongest,
+}
+
 /// How to read a log.
 #[derive(Debug, Clone, clap::Args)]
 pub struct LogArgs {
@@ -33,6 +44,10 @@ pub struct LogArgs {
     /// Only this topic (ROS formats).
     #[arg(long)]
     pub topic: Option<String>,
+    /// Which echo of each beam a `sensor_msgs/MultiEchoLaserScan` gives
+    /// (ROS formats; LaserScans have one).
+    #[arg(long, value_enum, default_value = "first")]
+    pub echo: EchoArg,
     /// Field of view of CARMEN FLASER lines, degrees, in (0, 360] (needed
     /// for beam counts other than 180, 181 and 361).
     #[arg(long, allow_negative_numbers = true)]
@@ -103,8 +118,38 @@ impl LogArgs {
             FormatArg::Csv => LogFormat::Csv,
         });
         options.topic = self.topic.clone();
+        options.echo = match self.echo {
+            EchoArg::First => Echo::First,
+            EchoArg::Last => Echo::Last,
+            EchoArg::Strongest => Echo::Strongest,
+        };
         options.carmen.fov_rad = self.fov.map(f64::to_radians);
         options.carmen.max_range_m = self.max_range;
         Ok(options)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        log: LogArgs,
+    }
+
+    /// `--echo` reaches the reader's options; the first echo by default.
+    #[test]
+    fn echo_reaches_the_reader() {
+        let parse = |args: &[&str]| {
+            let cli = Cli::try_parse_from(std::iter::once("x").chain(args.iter().copied()));
+            cli.unwrap().log.options().unwrap().echo
+        };
+        assert_eq!(parse(&[]), Echo::First);
+        assert_eq!(parse(&["--echo", "last"]), Echo::Last);
+        assert_eq!(parse(&["--echo", "strongest"]), Echo::Strongest);
+        assert!(Cli::try_parse_from(["x", "--echo", "second"]).is_err());
     }
 }

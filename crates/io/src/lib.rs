@@ -38,7 +38,7 @@ pub use foxglove_mcap::{
     foxglove_schema,
 };
 pub use laserscan_codec::{
-    decode_laserscan_cdr, decode_laserscan_ros1, decode_multiecho_cdr, decode_multiecho_ros1,
+    Echo, decode_laserscan_cdr, decode_laserscan_ros1, decode_multiecho_cdr, decode_multiecho_ros1,
     encode_laserscan_cdr, encode_multiecho_cdr,
 };
 pub use lines_file::{

@@ -33,6 +33,9 @@ pub struct LogOptions {
     pub format: Option<LogFormat>,
     /// Only this topic (ROS formats).
     pub topic: Option<String>,
+    /// Which echo of a `MultiEchoLaserScan`'s beams is read (ROS formats;
+    /// the first by default).
+    pub echo: crate::Echo,
     /// CARMEN options (field of view, max range, time offset).
     pub carmen: CarmenOptions,
 }
@@ -274,9 +277,9 @@ fn read_format(
             }
             Ok(count)
         }
-        LogFormat::Ros1Bag => read_ros1_bag(path, topic, &mut visit),
-        LogFormat::Ros2Bag => read_ros2_bag(path, topic, &mut visit),
-        LogFormat::Mcap => read_mcap(path, topic, &mut visit),
+        LogFormat::Ros1Bag => read_ros1_bag(path, topic, options.echo, &mut visit),
+        LogFormat::Ros2Bag => read_ros2_bag(path, topic, options.echo, &mut visit),
+        LogFormat::Mcap => read_mcap(path, topic, options.echo, &mut visit),
         LogFormat::Json => read_scan_json(path, &mut visit),
         LogFormat::Csv => read_scan_csv(path, &mut visit),
     }

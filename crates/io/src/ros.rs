@@ -6,7 +6,7 @@
 //! static transforms ([`read_ros_motion`]).
 
 use crate::laserscan_codec::{
-    decode_laserscan_cdr, decode_laserscan_ros1, decode_multiecho_cdr, decode_multiecho_ros1,
+    Echo, decode_laserscan_cdr, decode_laserscan_ros1, decode_multiecho_cdr, decode_multiecho_ros1,
     laserscan_frame,
 };
 use crate::odometry_codec::{decode_odometry_cdr, decode_odometry_ros1};
@@ -87,22 +87,24 @@ fn scan_record(scan: pcaline_geometry::Scan, position: usize) -> LogRecord {
 pub fn read_ros1_bag(
     path: &Path,
     topic: Option<&str>,
+    echo: Echo,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
-    read_scans(path, topic, visit, ros1_messages, "message")
+    read_scans(path, topic, echo, visit, ros1_messages, "message")
 }
 
 /// A pass over the messages of one type of a ROS log.
 type MessagePass = fn(&Path, &[Wanted<'_>], &mut Visit<'_>) -> Result<Pass, IoError>;
 
 /// The scans of a pass (`messages`): LaserScans, and MultiEchoLaserScans
-/// as the scan of each beam's first echo; each decode error names its
+/// as the scan of each beam's `echo`; each decode error names its
 /// `label` (message number or id). Returns the scans read; a `topic` asked
 /// for that no scan channel has is an error, unless `visit` stopped the
 /// pass early.
 fn read_scans(
     path: &Path,
     topic: Option<&str>,
+    echo: Echo,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
     messages: MessagePass,
     label: &str,
@@ -113,8 +115,8 @@ fn read_scans(
         let (scan, name) = match (m.kind, m.encoding) {
             (0, Encoding::Cdr) => (decode_laserscan_cdr(m.data), "LaserScan"),
             (0, Encoding::Ros1) => (decode_laserscan_ros1(m.data), "LaserScan"),
-            (_, Encoding::Cdr) => (decode_multiecho_cdr(m.data), "MultiEchoLaserScan"),
-            (_, Encoding::Ros1) => (decode_multiecho_ros1(m.data), "MultiEchoLaserScan"),
+            (_, Encoding::Cdr) => (decode_multiecho_cdr(m.data, echo), "MultiEchoLaserScan"),
+            (_, Encoding::Ros1) => (decode_multiecho_ros1(m.data, echo), "MultiEchoLaserScan"),
         };
         let scan = scan.map_err(|e| {
             IoError::parse(m.file, None, format!("{label} {}: {name}: {e}", m.position))
@@ -330,9 +332,10 @@ pub(crate) fn files_with_extension(
 pub fn read_ros2_bag(
     path: &Path,
     topic: Option<&str>,
+    echo: Echo,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
-    read_scans(path, topic, visit, ros2_messages, "message id")
+    read_scans(path, topic, echo, visit, ros2_messages, "message id")
 }
 
 /// The first bytes of a zstd frame. A CDR message starts with its
@@ -486,9 +489,10 @@ fn ros2_messages(
 pub fn read_mcap(
     path: &Path,
     topic: Option<&str>,
+    echo: Echo,
     visit: &mut dyn FnMut(LogRecord) -> ControlFlow<()>,
 ) -> Result<usize, IoError> {
-    read_scans(path, topic, visit, mcap_messages, "message")
+    read_scans(path, topic, echo, visit, mcap_messages, "message")
 }
 
 /// The wanted CDR messages of an MCAP file, in the file's order.
@@ -877,7 +881,7 @@ mod tests {
             w.finish().unwrap();
         }
         let mut got = Vec::new();
-        let n = read_mcap(&path, Some("/scan"), &mut |r| {
+        let n = read_mcap(&path, Some("/scan"), Echo::First, &mut |r| {
             if let LogRecord::Scan(s) = r {
                 got.push(s.scan);
             }
@@ -886,12 +890,13 @@ mod tests {
         .unwrap();
         assert_eq!(n, 5);
         assert_eq!(got, scans);
-        let all = read_mcap(&path, None, &mut |_| ControlFlow::Continue(())).unwrap();
+        let all = read_mcap(&path, None, Echo::First, &mut |_| ControlFlow::Continue(())).unwrap();
         assert_eq!(all, 10);
         let motion = read_ros_motion(&path, LogFormat::Mcap, Some("/scan")).unwrap();
         assert_eq!(motion.scan_topics.iter().collect::<Vec<_>>(), ["/other", "/scan"]);
         // A topic no LaserScan channel has: an error listing those that exist.
-        let e = read_mcap(&path, Some("/nope"), &mut |_| ControlFlow::Continue(())).unwrap_err();
+        let e = read_mcap(&path, Some("/nope"), Echo::First, &mut |_| ControlFlow::Continue(()))
+            .unwrap_err();
         assert!(
             e.to_string().contains(
                 "no LaserScan or MultiEchoLaserScan on topic \"/nope\" (scan topics: /other, /scan)"
@@ -962,7 +967,7 @@ mod tests {
             w.finish().unwrap();
         }
         let mut got = Vec::new();
-        let n = read_mcap(&path, None, &mut |r| {
+        let n = read_mcap(&path, None, Echo::First, &mut |r| {
             if let LogRecord::Scan(s) = r {
                 got.push(s.scan);
             }
@@ -1001,6 +1006,7 @@ mod tests {
                 30.0,
                 k as f64 * 0.025,
                 &echoes(k),
+                &[],
                 "laser",
             )
         };
@@ -1039,6 +1045,17 @@ mod tests {
                 assert_eq!(scan.ranges[0], 2.0 + k as f32, "{format:?}");
                 assert!(scan.ranges[7].is_nan(), "{format:?}: a beam without echo");
             }
+            // `--echo last`: each beam's farthest return.
+            let last = crate::LogOptions { echo: Echo::Last, ..options.clone() };
+            let mut ranges = Vec::new();
+            crate::read_log(path, &last, |r| {
+                if let LogRecord::Scan(s) = r {
+                    ranges.push((s.scan.ranges[0], s.scan.ranges[7]));
+                }
+                ControlFlow::Continue(())
+            })
+            .unwrap();
+            assert!(ranges.iter().all(|(r, none)| *r == 9.0 && none.is_nan()), "{ranges:?}");
             let motion = read_ros_motion(path, format, None).unwrap();
             assert_eq!(motion.scan_frame.as_deref(), Some("laser"));
             assert_eq!(motion.scan_topics.iter().collect::<Vec<_>>(), ["/echoes"]);
@@ -1081,7 +1098,7 @@ mod tests {
         };
         let read = |path: &Path| -> Result<Vec<Vec<f32>>, IoError> {
             let mut got = Vec::new();
-            read_ros2_bag(path, None, &mut |r| {
+            read_ros2_bag(path, None, Echo::First, &mut |r| {
                 if let LogRecord::Scan(s) = r {
                     got.push(s.scan.ranges);
                 }
