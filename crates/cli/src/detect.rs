@@ -166,6 +166,7 @@ pub fn run(args: &DetectArgs, quiet: bool) -> Result<()> {
         return Err(BadInput(format!("{}: no such file or folder", args.file.display())).into());
     }
     let config = resolve(&args.config, 0.01)?;
+    let _copies = args.log.keep_decompressed(&args.file);
     let sensor = args.log.sensor(&args.file, config.sensor)?;
     let detector = LineDetector::new(config.detector_for(sensor))?;
     let mut mcap = McapOut::create(args.mcap.as_deref())?;

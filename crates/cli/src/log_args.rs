@@ -3,7 +3,7 @@
 use crate::exit::BadInput;
 use clap::ValueEnum;
 use pcaline::geometry::SensorProfile;
-use pcaline_io::{Echo, LogFormat, LogOptions, LogRecord, read_log};
+use pcaline_io::{DecompressedBag, Echo, LogFormat, LogOptions, LogRecord, read_log};
 use std::ops::ControlFlow;
 use std::path::Path;
 
@@ -90,6 +90,17 @@ impl LogArgs {
             _ => ControlFlow::Continue(()),
         })?;
         Ok(named)
+    }
+
+    /// Keeps the decompressed copies of `file`'s ROS 2 bag files that
+    /// rosbag2 compressed whole, for every pass over the log while the
+    /// result lives (the sensor's, the motion's, the scans'): each file is
+    /// decompressed once. `None` for other logs, and when the log cannot be
+    /// read: the pass that reads it then reports why.
+    pub fn keep_decompressed(&self, file: &Path) -> Option<DecompressedBag> {
+        let options = self.options().ok()?;
+        let format = options.format.map_or_else(|| LogFormat::detect(file), Ok).ok()?;
+        (format == LogFormat::Ros2Bag).then(|| pcaline_io::keep_decompressed(file).ok()).flatten()
     }
 
     /// The reader options; an error naming the option for a field of view

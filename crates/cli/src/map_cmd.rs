@@ -336,6 +336,7 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
     aiding_config.validate().map_err(|e| {
         BadInput(format!("--translation-noise-per-m / --rotation-noise-deg-per-m: {e}"))
     })?;
+    let _copies = args.input.keep_decompressed(&args.log);
     let sensor = args.input.sensor(&args.log, config.sensor)?;
     let mut options = args.input.options()?;
     // Whether a CARMEN log's scans are its RAWLASER1 lines, decided once for

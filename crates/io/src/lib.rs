@@ -58,7 +58,10 @@ pub use odometry_codec::{
 pub use pcaline_geometry::Relation;
 pub use record::{LogRecord, OdometryRecord, ScanRecord};
 pub use relations::{ScanPair, read_relations, read_scan_pairs};
-pub use ros::{OdometryTrack, RosMotion, read_mcap, read_ros_motion, read_ros1_bag, read_ros2_bag};
+pub use ros::{
+    DecompressedBag, OdometryTrack, RosMotion, keep_decompressed, read_mcap, read_ros_motion,
+    read_ros1_bag, read_ros2_bag,
+};
 pub use scan_text::{ScanJson, read_scan_csv, read_scan_json, scans_to_csv};
 pub use scene_file::{parse_scene, read_scene, write_scene};
 pub use tf_codec::{FrameTransform, decode_tf_cdr, decode_tf_ros1, encode_tf_cdr};

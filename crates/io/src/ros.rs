@@ -368,6 +368,7 @@ fn message_bytes(data: &[u8]) -> Result<std::borrow::Cow<'_, [u8]>, String> {
 /// temporary copy decompressed beside the system's other temporary files,
 /// removed when this is dropped (and by [`crate::remove_temporary_files`]
 /// on an interrupt).
+#[derive(Debug)]
 struct Db3File {
     path: std::path::PathBuf,
     temporary: bool,
@@ -384,6 +385,8 @@ impl Db3File {
         let path = std::env::temp_dir().join(format!("pcaline-{}-{k}-{name}", std::process::id()));
         crate::atomic::register(&path);
         let out = Db3File { path, temporary: true };
+        #[cfg(test)]
+        DECOMPRESSIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let input = std::fs::File::open(file).map_err(|e| IoError::io(file, e))?;
         let mut output = std::fs::File::create(&out.path).map_err(|e| IoError::io(&out.path, e))?;
         zstd::stream::copy_decode(input, &mut output)
@@ -399,6 +402,59 @@ impl Drop for Db3File {
             crate::atomic::unregister(&self.path);
         }
     }
+}
+
+/// The decompressed copies in use, by compressed file: each is made once
+/// and shared while something holds it (a pass over the bag, or a
+/// [`DecompressedBag`]).
+static COPIES: std::sync::Mutex<Vec<(std::path::PathBuf, std::sync::Weak<Db3File>)>> =
+    std::sync::Mutex::new(Vec::new());
+
+/// Copies decompressed so far (for the tests).
+#[cfg(test)]
+static DECOMPRESSIONS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+impl Db3File {
+    /// [`Db3File::open`], sharing a decompressed copy of `file` that is
+    /// still held.
+    fn shared(file: &Path) -> Result<std::sync::Arc<Db3File>, IoError> {
+        if !is_compressed_db3(file) {
+            return Db3File::open(file).map(std::sync::Arc::new);
+        }
+        let mut copies = COPIES.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        copies.retain(|(_, copy)| copy.strong_count() > 0);
+        if let Some(copy) = copies.iter().filter(|(p, _)| p == file).find_map(|(_, c)| c.upgrade())
+        {
+            return Ok(copy);
+        }
+        let copy = std::sync::Arc::new(Db3File::open(file)?);
+        copies.push((file.to_path_buf(), std::sync::Arc::downgrade(&copy)));
+        Ok(copy)
+    }
+}
+
+/// Holds the decompressed copies of a ROS 2 bag's files that rosbag2
+/// compressed whole (`.db3.zstd`), so that every pass over the bag while
+/// this lives reads them instead of decompressing each file again. The
+/// copies are removed when it is dropped (and on an interrupt, as every
+/// temporary copy is).
+#[derive(Debug)]
+#[must_use = "the copies are removed when this is dropped"]
+pub struct DecompressedBag {
+    _copies: Vec<std::sync::Arc<Db3File>>,
+}
+
+/// Decompresses the `.db3.zstd` files of the ROS 2 bag at `path` (a file
+/// or a bag folder) once, for as long as the result lives; a bag without
+/// such files holds nothing. Errors name the file, as reading the bag
+/// does.
+pub fn keep_decompressed(path: &Path) -> Result<DecompressedBag, IoError> {
+    let copies = bag_files(path, &[".db3", ".db3.zstd"])?
+        .iter()
+        .filter(|f| is_compressed_db3(f))
+        .map(|f| Db3File::shared(f))
+        .collect::<Result<_, _>>()?;
+    Ok(DecompressedBag { _copies: copies })
 }
 
 /// A file rosbag2 compressed whole: `*.db3.zstd`.
@@ -417,7 +473,7 @@ fn ros2_messages(
     let mut pass = Pass::new(wanted);
     for file in bag_files(path, &[".db3", ".db3.zstd"])? {
         let sql = |e: rusqlite::Error| IoError::parse(&file, None, format!("sqlite: {e}"));
-        let db_file = Db3File::open(&file)?;
+        let db_file = Db3File::shared(&file)?;
         let db = rusqlite::Connection::open_with_flags(
             &db_file.path,
             rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY,
@@ -1121,12 +1177,24 @@ mod tests {
         assert_eq!(LogFormat::detect(&folder).unwrap(), LogFormat::Ros2Bag);
         assert_eq!(read(&whole).unwrap(), want);
         assert_eq!(read(&folder).unwrap(), want);
-        let leftovers = std::fs::read_dir(std::env::temp_dir())
-            .unwrap()
-            .filter_map(|e| e.ok())
-            .filter(|e| e.file_name().to_string_lossy().ends_with("-bag_0.db3"))
-            .count();
-        assert_eq!(leftovers, 0, "the decompressed copy stays behind");
+        let leftovers = || {
+            std::fs::read_dir(std::env::temp_dir())
+                .unwrap()
+                .filter_map(|e| e.ok())
+                .filter(|e| e.file_name().to_string_lossy().ends_with("-bag_0.db3"))
+                .count()
+        };
+        assert_eq!(leftovers(), 0, "the decompressed copy stays behind");
+        // Held, the copy is made once for every pass, and removed after.
+        let copies = || DECOMPRESSIONS.load(std::sync::atomic::Ordering::Relaxed);
+        let kept = keep_decompressed(&folder).unwrap();
+        let made = copies();
+        assert_eq!(read(&folder).unwrap(), want);
+        assert_eq!(read(&whole).unwrap(), want);
+        assert_eq!((copies(), leftovers()), (made, 1));
+        drop(kept);
+        assert_eq!(leftovers(), 0, "the kept copy stays behind");
+        assert!(keep_decompressed(&plain).is_ok(), "nothing to keep");
         // A compressed message cut short: an error naming it.
         let db = rusqlite::Connection::open(&per_message).unwrap();
         db.execute("UPDATE messages SET data = substr(data, 1, 12) WHERE id = 2", []).unwrap();
