@@ -913,18 +913,14 @@ impl LoopClosing {
             let placed = |v: &VerifiedLoop| {
                 self.graph.nodes[v.candidate].compose(&v.alignment.candidate_from_current)
             };
-            let elsewhere = accepted
+            let other_place_m = accepted
                 .iter()
-                .filter(|v| {
-                    let d = placed(&best).between(&placed(v));
-                    d.x().hypot(d.y()) > SAME_PLACE_M
-                        || wrap_angle(d.heading()).abs() > SAME_PLACE_RAD
-                })
+                .filter(|v| elsewhere(&placed(&best), &placed(v)))
                 .map(|v| v.alignment.matched_length_m)
                 .fold(0.0f64, f64::max);
-            if elsewhere > 0.0 {
+            if other_place_m > 0.0 {
                 let mut r = best.record(current, LoopOutcome::LookAlikePlace);
-                r.other_place_length_m = elsewhere;
+                r.other_place_length_m = other_place_m;
                 self.loops.push(r);
                 return None;
             }
@@ -998,8 +994,7 @@ impl LoopClosing {
             if b.rms_m > c.max_rms_m || b.weakest_direction_m < c.min_weakest_direction_m {
                 continue;
             }
-            let d = placed.between(&node.compose(&b.candidate_from_current));
-            if d.x().hypot(d.y()) > SAME_PLACE_M || wrap_angle(d.heading()).abs() > SAME_PLACE_RAD {
+            if elsewhere(&placed, &node.compose(&b.candidate_from_current)) {
                 longest = longest.max(b.matched_length_m);
             }
         }
@@ -1117,6 +1112,13 @@ impl LoopClosing {
         }
         map
     }
+}
+
+/// Whether two placements of one keyframe are different places: farther
+/// apart than [`SAME_PLACE_M`] or turned by more than [`SAME_PLACE_RAD`].
+fn elsewhere(a: &Pose2, b: &Pose2) -> bool {
+    let d = a.between(b);
+    d.x().hypot(d.y()) > SAME_PLACE_M || wrap_angle(d.heading()).abs() > SAME_PLACE_RAD
 }
 
 fn record(
