@@ -21,7 +21,7 @@
 //! This is no verification: corridors of one width look alike everywhere.
 //! It only chooses which far keyframes [`crate::align_lines`] examines.
 
-use pcaline_geometry::{ConfigError, LineSegment, Point2, Vector2};
+use pcaline_geometry::{ConfigError, LineSegment, Point2, Vector2, point_segment_distance};
 
 /// Bins of the parallel pairs' separation ...
 pub const SEPARATION_BINS: usize = 32;
@@ -118,8 +118,10 @@ impl PlaceDescriptor {
     pub fn of(lines: &[LineSegment], min_line_m: f64) -> Option<Self> {
         let kept: Vec<&LineSegment> = lines
             .iter()
-            .filter(|l| l.length() >= min_line_m && l.start().coords.iter().all(|v| v.is_finite()))
-            .filter(|l| l.end().coords.iter().all(|v| v.is_finite()))
+            .filter(|l| {
+                let finite = |p: Point2<f64>| p.coords.iter().all(|v| v.is_finite());
+                l.length() >= min_line_m && finite(l.start()) && finite(l.end())
+            })
             .collect();
         let mut bins = [0.0; BINS];
         for (i, a) in kept.iter().enumerate() {
@@ -164,7 +166,11 @@ fn add_pair(bins: &mut [f64; BINS], a: &LineSegment, b: &LineSegment) {
     let w = b.start() - a.start();
     let t = (w.x * db.y - w.y * db.x) / denominator;
     let corner = a.start() + da * t;
-    let away = distance_to_segment(&corner, a).max(distance_to_segment(&corner, b));
+    let away = point_segment_distance(&corner, &a.start(), &a.end()).max(point_segment_distance(
+        &corner,
+        &b.start(),
+        &b.end(),
+    ));
     let angle_bin = (angle.to_degrees() - 10.0) / 10.0 - 0.5;
     let corner_bin = away.min(CORNER_BINS as f64 - 1.0);
     // Bilinear: the angle's two nearest bins by the corner's two.
@@ -196,14 +202,6 @@ fn neighbours(x: f64, n: usize) -> (usize, usize, f64) {
     let i0 = x.floor() as usize;
     let i1 = (i0 + 1).min(n - 1);
     (i0, i1, x - i0 as f64)
-}
-
-/// Distance from `p` to the segment `s`.
-fn distance_to_segment(p: &Point2<f64>, s: &LineSegment) -> f64 {
-    let d = s.end() - s.start();
-    let len2 = d.norm_squared();
-    let t = if len2 > 0.0 { ((p - s.start()).dot(&d) / len2).clamp(0.0, 1.0) } else { 0.0 };
-    (p - (s.start() + d * t)).norm()
 }
 
 #[cfg(test)]

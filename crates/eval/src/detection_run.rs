@@ -2,7 +2,7 @@
 
 use crate::{DetectionCriteria, DetectionScore, true_walls};
 use pcaline_fitting::{Moments, fit_pca};
-use pcaline_geometry::{LineSegment, Point2, polar_to_cartesian};
+use pcaline_geometry::{LineSegment, Point2, point_segment_distance, polar_to_cartesian};
 use pcaline_sim::{Scene, SceneError, SimFrame, Simulator, World};
 use std::time::Instant;
 
@@ -190,18 +190,11 @@ pub fn surface_rms_m(line: &LineSegment, world: &World) -> f64 {
         let nearest = world
             .walls()
             .iter()
-            .map(|w| distance_to_segment(&p, &w.a, &w.b))
+            .map(|w| point_segment_distance(&p, &w.a, &w.b))
             .fold(f64::INFINITY, f64::min);
         sum += nearest * nearest;
     }
     (sum / SAMPLES as f64).sqrt()
-}
-
-fn distance_to_segment(p: &Point2<f64>, a: &Point2<f64>, b: &Point2<f64>) -> f64 {
-    let ab = b - a;
-    let len2 = ab.norm_squared();
-    let t = if len2 > 0.0 { ((p - a).dot(&ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
-    (p - (a + ab * t)).norm()
 }
 
 #[cfg(test)]

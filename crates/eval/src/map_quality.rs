@@ -2,7 +2,7 @@
 //! wall it represents, and how much of the wall length the sensor saw is
 //! covered by the map.
 
-use pcaline_geometry::{LineSegment, Point2, Vector2};
+use pcaline_geometry::{LineSegment, Point2, point_segment_distance};
 use pcaline_mapping::MapLine;
 use pcaline_sim::{Fault, SimFrame, Wall};
 
@@ -195,13 +195,6 @@ fn rms_to_line(l: &LineSegment, w: &Wall) -> f64 {
 fn rms_to_segment(l: &LineSegment, w: &Wall) -> f64 {
     let d = |p: &Point2<f64>| point_segment_distance(p, &w.a, &w.b);
     ((d(&l.start()).powi(2) + d(&l.end()).powi(2)) / 2.0).sqrt()
-}
-
-fn point_segment_distance(p: &Point2<f64>, a: &Point2<f64>, b: &Point2<f64>) -> f64 {
-    let ab: Vector2<f64> = b - a;
-    let len2 = ab.norm_squared();
-    let t = if len2 > 0.0 { ((p - a).dot(&ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
-    (p - (a + ab * t)).norm()
 }
 
 #[cfg(test)]

@@ -33,7 +33,7 @@ mod twist;
 pub use angle::{line_angle_diff, wrap_angle};
 pub use bearings::{BearingTable, ScanPoints, polar_to_cartesian};
 pub use config_error::ConfigError;
-pub use line::{LineSegment, SlopeIntercept};
+pub use line::{LineSegment, SlopeIntercept, point_segment_distance};
 pub use nalgebra::{Matrix2, Matrix3, Point2, Vector2, Vector3};
 pub use noise::RangeNoise;
 pub use pose::Pose2;

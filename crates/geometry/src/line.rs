@@ -263,6 +263,24 @@ impl LineSegment {
     }
 }
 
+/// The distance from `p` to the segment from `a` to `b`: to its nearest
+/// point, an end when `p` projects beyond it. A segment of zero length is
+/// the point `a`.
+///
+/// ```
+/// use pcaline_geometry::{Point2, point_segment_distance};
+/// let (a, b) = (Point2::new(0.0, 0.0), Point2::new(2.0, 0.0));
+/// assert_eq!(point_segment_distance(&Point2::new(1.0, 0.5), &a, &b), 0.5);
+/// assert_eq!(point_segment_distance(&Point2::new(5.0, 4.0), &a, &b), 5.0); // past the end
+/// assert_eq!(point_segment_distance(&Point2::new(3.0, 4.0), &a, &a), 5.0);
+/// ```
+pub fn point_segment_distance(p: &Point2<f64>, a: &Point2<f64>, b: &Point2<f64>) -> f64 {
+    let ab = b - a;
+    let len2 = ab.norm_squared();
+    let t = if len2 > 0.0 { ((p - a).dot(&ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    (p - (a + ab * t)).norm()
+}
+
 /// Hessian normal form `(alpha, d)` of the line through `p` with direction `dir`.
 pub(crate) fn hessian(p: &Point2<f64>, dir: &Vector2<f64>) -> (f64, f64) {
     let mut n = Vector2::new(-dir.y, dir.x);
