@@ -73,12 +73,23 @@ pub struct EvalArgs {
     /// Also run the drift grid on Intel (for --real): heading-rate biases
     /// 0.1, 0.3 and 1°/s, speed errors 2-3%, seeds 1-4, every aiding mode;
     /// and MIT CSAIL's sensitivity runs: its raw odometry plus a tiny random
-    /// walk, seeds 1-8, the estimator alone and with loop closure.
+    /// walk, seeds 1 to --sensitivity-seeds, the estimator alone and with
+    /// loop closure.
     #[arg(long)]
     drift_grid: bool,
     /// Seed of the synthetic drift added to the Intel log's poses (for --real).
     #[arg(long, default_value_t = 1)]
     drift_seed: u64,
+    /// Number of MIT CSAIL sensitivity runs (for --real --drift-grid):
+    /// seeds 1 to N. A single run is one draw of a chaotic process; compare
+    /// changes over 32 or more.
+    #[arg(
+        long,
+        default_value_t = 8,
+        requires = "drift_grid",
+        value_parser = clap::value_parser!(u64).range(1..=1000)
+    )]
+    sensitivity_seeds: u64,
     /// The datasets folder (for --real); `$PCALINE_DATA` or `../shared/data`.
     #[arg(long)]
     data: Option<std::path::PathBuf>,
@@ -228,12 +239,12 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
             .unwrap_or_else(|| "../shared/data".into());
         // The first configuration named, or the default.
         let spec = args.configs.first().map_or("default", String::as_str);
-        let report = crate::eval_real::evaluate(
-            &data,
-            args.drift_seed,
-            &resolve(spec, 0.01)?,
-            args.drift_grid,
-        )?;
+        let options = crate::eval_real::RealOptions {
+            drift_seed: args.drift_seed,
+            drift_grid: args.drift_grid,
+            sensitivity_seeds: (1..=args.sensitivity_seeds).collect(),
+        };
+        let report = crate::eval_real::evaluate(&data, &resolve(spec, 0.01)?, &options)?;
         if args.json {
             outln!("{}", serde_json::to_string_pretty(&report)?)?;
         } else {
@@ -916,31 +927,39 @@ fn print_drift_grid(grid: &[crate::eval_real::DriftCell]) -> anyhow::Result<()> 
     Ok(())
 }
 
-/// MIT CSAIL's sensitivity runs, run by run, then each mode's median and
-/// range.
+/// MIT CSAIL's sensitivity runs, run by run, then each mode's median, mean
+/// and range, and for a loop-closing mode the runs in which a wrong loop
+/// stands.
 fn print_sensitivity(runs: &[crate::eval_real::SensitivityRun]) -> anyhow::Result<()> {
     let p = pcaline_eval::SENSITIVITY_PERTURBATION;
+    let mut seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect();
+    seeds.dedup();
     outln!(
-        "MIT CSAIL sensitivity: the raw odometry plus a random walk of {} mm/sqrt(s) per axis and {:.4}°/sqrt(s), seeds {:?}",
+        "MIT CSAIL sensitivity: the raw odometry plus a random walk of {} mm/sqrt(s) per axis and {:.4}°/sqrt(s), seeds {}",
         p.position_random_walk_m_sqrt_s * 1e3,
         p.heading_random_walk_rad_sqrt_s.to_degrees(),
-        pcaline_eval::SENSITIVITY_SEEDS
+        seed_list(&seeds)
     )?;
     outln!(
-        "{:<34} {:>5} {:>11} {:>9} {:>11} {:>9} {:>17}",
+        "{:<34} {:>5} {:>11} {:>9} {:>11} {:>9} {:>17} {:>14}",
         "trajectory",
         "seed",
         "heading rms",
         "pos rms",
         "rigid head.",
         "rigid pos",
-        "rel. rot (deg)"
+        "rel. rot (deg)",
+        "loops wrong/up"
     )?;
     let f = |v: Option<f64>| v.unwrap_or(f64::NAN);
     for run in runs {
         let t = &run.row;
+        let loops = run
+            .loops
+            .as_ref()
+            .map_or_else(|| "-".to_owned(), |l| format!("{}/{}", l.standing_wrong, l.standing));
         outln!(
-            "{:<34} {:>5} {:>9.2} ° {:>7.2} m {:>9.2} ° {:>7.2} m {:>8.3} ± {:<6.3}",
+            "{:<34} {:>5} {:>9.2} ° {:>7.2} m {:>9.2} ° {:>7.2} m {:>8.3} ± {:<6.3} {:>14}",
             t.name,
             run.seed,
             f(t.heading_rms_deg),
@@ -948,7 +967,8 @@ fn print_sensitivity(runs: &[crate::eval_real::SensitivityRun]) -> anyhow::Resul
             f(t.rigid_heading_rms_deg),
             f(t.rigid_position_rms_m),
             t.relations.rotation_mean_deg,
-            t.relations.rotation_std_deg
+            t.relations.rotation_std_deg,
+            loops
         )?;
     }
     let mut names: Vec<&str> = Vec::new();
@@ -958,20 +978,49 @@ fn print_sensitivity(runs: &[crate::eval_real::SensitivityRun]) -> anyhow::Resul
         }
     }
     for name in names {
+        let of_mode = || runs.iter().filter(|r| r.row.name == name);
         let of = |g: fn(&crate::eval_real::TrajectoryRow) -> Option<f64>| {
-            let mut v: Vec<f64> =
-                runs.iter().filter(|r| r.row.name == name).filter_map(|r| g(&r.row)).collect();
+            let mut v: Vec<f64> = of_mode().filter_map(|r| g(&r.row)).collect();
             v.sort_by(f64::total_cmp);
             let median = v.get(v.len() / 2).copied().unwrap_or(f64::NAN);
-            (median, v.first().copied().unwrap_or(f64::NAN), v.last().copied().unwrap_or(f64::NAN))
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            let (lo, hi) =
+                (v.first().copied().unwrap_or(f64::NAN), v.last().copied().unwrap_or(f64::NAN));
+            (median, mean, lo, hi)
         };
-        let (h, h_lo, h_hi) = of(|t| t.rigid_heading_rms_deg);
-        let (p, p_lo, p_hi) = of(|t| t.rigid_position_rms_m);
+        let (h, h_mean, h_lo, h_hi) = of(|t| t.rigid_heading_rms_deg);
+        let (p, p_mean, p_lo, p_hi) = of(|t| t.rigid_position_rms_m);
         outln!(
-            "{name}: rigid heading rms median {h:.2}° (range {h_lo:.2}-{h_hi:.2}°), rigid position rms median {p:.2} m (range {p_lo:.2}-{p_hi:.2} m)"
+            "{name}: rigid heading rms median {h:.2}°, mean {h_mean:.2}° (range {h_lo:.2}-{h_hi:.2}°); rigid position rms median {p:.2} m, mean {p_mean:.2} m (range {p_lo:.2}-{p_hi:.2} m)"
         )?;
+        let checked: Vec<&crate::eval_real::LoopRow> =
+            of_mode().filter_map(|r| r.loops.as_ref()).collect();
+        if !checked.is_empty() {
+            let wrong: Vec<&&crate::eval_real::LoopRow> =
+                checked.iter().filter(|l| l.standing_wrong > 0).collect();
+            let far = checked.iter().filter(|l| l.standing_error_m[1] >= 0.5).count();
+            let worst = checked
+                .iter()
+                .map(|l| l.standing_error_m[1])
+                .fold(0.0f64, |a, b| if b.is_nan() { a } else { a.max(b) });
+            outln!(
+                "{name}: a wrong loop stands in {} of {} runs, one 0.5 m or more off in {far} (worst {worst:.2} m)",
+                wrong.len(),
+                checked.len()
+            )?;
+        }
     }
     Ok(())
+}
+
+/// Seeds as `1-8` when there are more than two and each follows the last
+/// by one, else listed.
+fn seed_list(seeds: &[u64]) -> String {
+    let consecutive = seeds.windows(2).all(|w| w[1] == w[0] + 1);
+    match (seeds.first(), seeds.last()) {
+        (Some(a), Some(b)) if seeds.len() > 2 && consecutive => format!("{a}-{b}"),
+        _ => format!("{seeds:?}"),
+    }
 }
 
 /// The UTM-30LX-EW bag: its lines and the LIDAR-only sharpness.
@@ -1031,4 +1080,17 @@ fn print_detection_stats(rows: &[crate::eval_real::DetectionStats]) -> anyhow::R
         )?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::seed_list;
+
+    #[test]
+    fn seeds_that_run_on_are_a_range() {
+        assert_eq!(seed_list(&[1, 2, 3, 4, 5, 6, 7, 8]), "1-8");
+        assert_eq!(seed_list(&[1, 2]), "[1, 2]");
+        assert_eq!(seed_list(&[1, 3, 4]), "[1, 3, 4]");
+        assert_eq!(seed_list(&[]), "[]");
+    }
 }

@@ -11,9 +11,8 @@ use pcaline::aiding::{Aiding, AidingConfig, AidingMode, Localizer, LoopClosureCo
 use pcaline::geometry::SensorProfile;
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
-    LoopCheck, RelationErrors, SENSITIVITY_SEEDS, StampedTrajectory, aligned_trajectory_errors,
-    perturbed, reference_by_source, relation_errors, rigidly_aligned_trajectory_errors,
-    trajectory_errors,
+    LoopCheck, RelationErrors, StampedTrajectory, aligned_trajectory_errors, perturbed,
+    reference_by_source, relation_errors, rigidly_aligned_trajectory_errors, trajectory_errors,
 };
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
@@ -155,8 +154,8 @@ pub struct RealReport {
     /// poses.
     pub csail_loops: Vec<LoopRow>,
     /// MIT CSAIL with [`pcaline_eval::perturbed`] raw odometry, seeds
-    /// [`SENSITIVITY_SEEDS`], the estimator alone and with loop closure;
-    /// empty unless asked for (`--drift-grid`).
+    /// [`RealOptions::sensitivity_seeds`], the estimator alone and with loop
+    /// closure; empty unless asked for (`--drift-grid`).
     pub csail_sensitivity: Vec<SensitivityRun>,
     /// Intel: the relation metric of the log's own poses, then of the drifted
     /// poses raw and aided.
@@ -297,12 +296,32 @@ pub fn detection_stats(
     Ok((a.finish(log, None, scans), b.finish(log, Some(sensor), scans)))
 }
 
+/// What `pcaline eval --real` runs besides its fixed measurements.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RealOptions {
+    /// Seed of the synthetic drift added to Intel's poses.
+    pub drift_seed: u64,
+    /// Whether to run Intel's drift grid and MIT CSAIL's sensitivity runs.
+    pub drift_grid: bool,
+    /// The seeds of MIT CSAIL's sensitivity runs (with `drift_grid`;
+    /// `pcaline eval` runs 1 to `--sensitivity-seeds`, 8 by default:
+    /// [`pcaline_eval::SENSITIVITY_SEEDS`]).
+    pub sensitivity_seeds: Vec<u64>,
+}
+
 /// Runs every real-data measurement on the datasets folder `data`.
-pub fn evaluate(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<RealReport> {
+pub fn evaluate(data: &Path, config: &NamedConfig, options: &RealOptions) -> Result<RealReport> {
+    let (seed, grid) = (options.drift_seed, options.drift_grid);
+    let sensitivity_seeds: &[u64] = if grid { &options.sensitivity_seeds } else { &[] };
     // The logs on the thread pool; each part's figures do not depend on
     // the others or on the number of threads.
     let ((csail, intel), (csail_own, (detection, utm))) = rayon::join(
-        || rayon::join(|| csail(data, config, grid), || intel(data, seed, config, grid)),
+        || {
+            rayon::join(
+                || csail(data, config, sensitivity_seeds),
+                || intel(data, seed, config, grid),
+            )
+        },
         || {
             rayon::join(
                 || csail_own(data, config),
@@ -389,10 +408,11 @@ fn take_optimized(runner: &mut Localizer, poses: &mut [Pose2]) {
 const CSAIL_REFERENCE_GAP_SCANS: usize = 2;
 
 /// MIT CSAIL: raw and aided odometry at the scans with corrected poses, and
-/// the loops of the loop-closing modes against the corrected poses; with
-/// `sensitivity`, the estimator's runs on perturbed odometry
-/// ([`pcaline_eval::perturbed`]).
-fn csail(data: &Path, config: &NamedConfig, sensitivity: bool) -> Result<CsailResult> {
+/// the loops of the loop-closing modes against the corrected poses; for each
+/// seed of `sensitivity_seeds`, the estimator's runs on perturbed odometry
+/// ([`pcaline_eval::perturbed`]), each with its loops checked.
+fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result<CsailResult> {
+    let sensitivity = !sensitivity_seeds.is_empty();
     let dir = data.join("mit-csail");
     let pairs = read_scan_pairs(&dir.join("csail_corrected_to_raw_pairs.txt"))?;
     let mut loops = Loops::new(config)?;
@@ -428,7 +448,7 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity: bool) -> Result<CsailRe
         let times: Vec<f64> =
             kept.iter().enumerate().map(|(k, (t, _))| t.unwrap_or(k as f64)).collect();
         let runs: Vec<(u64, &'static str, AidingConfig, Option<LoopClosureConfig>)> =
-            SENSITIVITY_SEEDS
+            sensitivity_seeds
                 .iter()
                 .flat_map(|&seed| {
                     modes(config)
@@ -447,7 +467,12 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity: bool) -> Result<CsailRe
                     .map(|((stamp, lines), source)| localizer.step_with(*stamp, source, lines).0)
                     .collect();
                 take_optimized(&mut localizer, &mut est);
-                Ok(SensitivityRun { seed, row: score.row(&format!("{name} odometry"), &est)? })
+                let loops = localizer.loop_closing().map(|l| {
+                    let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
+                    LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, &per_scan))
+                });
+                let row = score.row(&format!("{name} odometry"), &est)?;
+                Ok(SensitivityRun { seed, row, loops })
             })
             .collect::<Result<Vec<_>>>()?
     } else {
@@ -639,6 +664,9 @@ pub struct SensitivityRun {
     pub seed: u64,
     /// The trajectory against the corrected poses (named by its mode).
     pub row: TrajectoryRow,
+    /// The run's loops against the corrected poses, for a loop-closing
+    /// mode (`None` for the estimator alone).
+    pub loops: Option<LoopRow>,
 }
 
 /// The Intel log's records, time-ordered, with each scan's lines.

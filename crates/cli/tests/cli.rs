@@ -483,6 +483,28 @@ fn reproduce_small() {
     assert_eq!(v["rows"].as_array().unwrap().len(), 5);
 }
 
+/// `--sensitivity-seeds` counts MIT CSAIL's sensitivity runs, which only
+/// the drift grid runs: without it, or at 0, a usage error (exit code 2)
+/// that names what is wrong, before any log is read.
+#[test]
+fn eval_sensitivity_seeds_need_the_drift_grid_and_one_seed() {
+    let out = pcaline(&["eval", "--real", "--sensitivity-seeds", "32", "--data", "/nonexistent"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--drift-grid"));
+    let out = pcaline(&[
+        "eval",
+        "--real",
+        "--drift-grid",
+        "--sensitivity-seeds",
+        "0",
+        "--data",
+        "/nonexistent",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--sensitivity-seeds"));
+    assert!(out.stdout.is_empty());
+}
+
 #[test]
 fn real_data_eval_checks_its_metrics_against_the_datasets() {
     let Some(data) = data("mit-csail").map(|p| p.parent().unwrap().to_path_buf()) else { return };
