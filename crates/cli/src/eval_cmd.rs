@@ -996,16 +996,12 @@ fn print_sensitivity(runs: &[crate::eval_real::SensitivityRun]) -> anyhow::Resul
         let checked: Vec<&crate::eval_real::LoopRow> =
             of_mode().filter_map(|r| r.loops.as_ref()).collect();
         if !checked.is_empty() {
-            let wrong: Vec<&&crate::eval_real::LoopRow> =
-                checked.iter().filter(|l| l.standing_wrong > 0).collect();
+            let wrong = checked.iter().filter(|l| l.standing_wrong > 0).count();
             let far = checked.iter().filter(|l| l.standing_error_m[1] >= 0.5).count();
-            let worst = checked
-                .iter()
-                .map(|l| l.standing_error_m[1])
-                .fold(0.0f64, |a, b| if b.is_nan() { a } else { a.max(b) });
+            // A run with no standing loop has NaN errors, which `max` skips.
+            let worst = checked.iter().map(|l| l.standing_error_m[1]).fold(0.0, f64::max);
             outln!(
-                "{name}: a wrong loop stands in {} of {} runs, one 0.5 m or more off in {far} (worst {worst:.2} m)",
-                wrong.len(),
+                "{name}: a wrong loop stands in {wrong} of {} runs, one 0.5 m or more off in {far} (worst {worst:.2} m)",
                 checked.len()
             )?;
         }
