@@ -518,6 +518,17 @@ fn ros2_messages(
                 break;
             }
             for (id, topic_id, data) in rows {
+                // Each page starts past the last id: a table whose ids do
+                // not increase (a corrupt file) would page for ever.
+                if id <= last {
+                    return Err(IoError::parse(
+                        &file,
+                        None,
+                        format!(
+                            "messages table: message id {id} comes after id {last} (a corrupt database)"
+                        ),
+                    ));
+                }
                 last = id;
                 let Some((topic, kind)) = taken.get(&topic_id) else { continue };
                 let data = message_bytes(&data)
@@ -1121,6 +1132,67 @@ mod tests {
             let e = crate::read_log(path, &wrong, |_| ControlFlow::Continue(())).unwrap_err();
             assert!(e.to_string().contains("topics: /echoes"), "{e}");
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A corrupt bag whose `messages` table gives its ids out of order
+    /// (rowids 1, 6, 2 in one leaf page, as a fuzzer made one) is an error
+    /// naming the ids, not an endless paging loop: the page after id 2
+    /// would hold ids 6 and 2 again. Run on a thread, so that a regression
+    /// fails instead of hanging the suite.
+    #[test]
+    fn a_messages_table_whose_ids_go_backwards_is_an_error_not_a_hang() {
+        let dir = std::env::temp_dir().join(format!("pcaline-rowids-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("corrupt.db3");
+        let scan = Scan::new(-1.0, 0.01, 0.1, 30.0, vec![2.0; 40]);
+        let data = encode_laserscan_cdr(&scan, "laser");
+        let messages: Vec<(&str, Vec<u8>)> = (0..3).map(|_| ("/scan", data.clone())).collect();
+        write_ros2_bag(&path, &[("/scan", ROS2_TYPE)], &messages);
+        // The table's leaf page: an 8-byte header, then one 2-byte cell
+        // pointer per row; a cell starts with its payload size and its
+        // rowid, one byte each for these small rows... unless the payload
+        // is 128 bytes or more (two bytes). Rowids 1, 2, 3 become 1, 6, 2.
+        let (page_size, root): (usize, usize) = {
+            let db = rusqlite::Connection::open(&path).unwrap();
+            let size: i64 = db.query_row("PRAGMA page_size", [], |r| r.get(0)).unwrap();
+            let root: i64 = db
+                .query_row("SELECT rootpage FROM sqlite_master WHERE name = 'messages'", [], |r| {
+                    r.get(0)
+                })
+                .unwrap();
+            (size as usize, root as usize)
+        };
+        let mut bytes = std::fs::read(&path).unwrap();
+        let page = (root - 1) * page_size;
+        assert_eq!(bytes[page], 0x0d, "a table leaf page");
+        let cells = u16::from_be_bytes([bytes[page + 3], bytes[page + 4]]) as usize;
+        assert_eq!(cells, 3);
+        for (k, rowid) in [(1usize, 6u8), (2, 2)] {
+            let at = page
+                + u16::from_be_bytes([bytes[page + 8 + 2 * k], bytes[page + 9 + 2 * k]]) as usize;
+            // Skip the payload-size varint.
+            let mut i = at;
+            while bytes[i] & 0x80 != 0 {
+                i += 1;
+            }
+            assert_eq!(bytes[i + 1], k as u8 + 1, "rowid of cell {k}");
+            bytes[i + 1] = rowid;
+        }
+        std::fs::write(&path, &bytes).unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let reader = path.clone();
+        std::thread::spawn(move || {
+            let mut n = 0;
+            let r = read_ros2_bag(&reader, None, Echo::First, &mut |_| {
+                n += 1;
+                ControlFlow::Continue(())
+            });
+            let _ = tx.send(r.map(|_| n));
+        });
+        let result = rx.recv_timeout(std::time::Duration::from_secs(30)).expect("the read ends");
+        let e = result.unwrap_err().to_string();
+        assert!(e.contains("corrupt.db3") && e.contains("id 2 comes after id 6"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
