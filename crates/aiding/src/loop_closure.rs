@@ -150,10 +150,11 @@ pub struct LoopClosureConfig {
     /// loops averages 9.7° instead of 10.9°; the logs' own poses and the
     /// drift grid move as little as without it, and `pcaline map` takes 2-3x
     /// as long. In a maze of identical cells every loop has a twin within
-    /// its radius and none stands (the shipped large building). Larger scales refuse right loops too (at 4 CSAIL keeps 3
-    /// loops, and with a heading bias on Intel the first right loops into
-    /// the start room are refused because its twin is down the corridor);
-    /// 0 turns the search off (`docs/accuracy.md`).
+    /// its radius and none stands (the shipped large building). Larger
+    /// scales refuse right loops too (at 4 CSAIL keeps 3 loops, and with a
+    /// heading bias on Intel the first right loops into the start room are
+    /// refused because its twin is down the corridor); 0 turns the search
+    /// off (`docs/accuracy.md`).
     pub place_search_scale: f64,
     /// Place recognition ([`PlaceRecognitionConfig`]): where the relative
     /// pose's uncertainty reaches beyond `max_search_radius_m`, older

@@ -7,7 +7,9 @@
 
 use crate::config_file::NamedConfig;
 use anyhow::{Context, Result};
-use pcaline::aiding::{Aiding, AidingConfig, AidingMode, Localizer, LoopClosureConfig, SensorLine};
+use pcaline::aiding::{
+    Aiding, AidingConfig, AidingMode, Localizer, LoopClosing, LoopClosureConfig, SensorLine,
+};
 use pcaline::geometry::SensorProfile;
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
@@ -467,10 +469,7 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
                     .map(|((stamp, lines), source)| localizer.step_with(*stamp, source, lines).0)
                     .collect();
                 take_optimized(&mut localizer, &mut est);
-                let loops = localizer.loop_closing().map(|l| {
-                    let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
-                    LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, &per_scan))
-                });
+                let loops = localizer.loop_closing().map(|l| loop_row(name, l, &per_scan));
                 let row = score.row(&format!("{name} odometry"), &est)?;
                 Ok(SensitivityRun { seed, row, loops })
             })
@@ -557,11 +556,16 @@ fn check_loops(
         .iter()
         .zip(localizers)
         .filter_map(|((name, _, _), runner)| {
-            let l = runner.loop_closing()?;
-            let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
-            Some(LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, reference)))
+            Some(loop_row(name, runner.loop_closing()?, reference))
         })
         .collect()
+}
+
+/// One loop-closing run's loops, `name`d, against `reference` (a pose per
+/// scan, where known).
+fn loop_row(name: &str, l: &LoopClosing, reference: &[Option<Pose2>]) -> LoopRow {
+    let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
+    LoopRow::new(name, &LoopCheck::of(l.loops(), &scans, reference))
 }
 
 /// One loop-closing run's loops against a log's corrected poses
