@@ -343,14 +343,31 @@ fn intel_own_poses_stay_where_they_are() {
 
 /// The shipped large building (a generated 40 x 30 cell maze of identical
 /// 3 m cells, exact odometry): every cell's walls line up with its
-/// neighbours' one cell away, the worst case for false loops. Loop closure
-/// must do no harm: no loop accepted that the truth contradicts, and the
-/// trajectory as good as the estimator's alone.
+/// neighbours' one cell away, the worst case for false loops. Its path never
+/// comes back to a place, so every loop found there is false, and none may
+/// even enter the graph (not as a loop the optimizer then switches off);
+/// the trajectory must be as good as the estimator's alone.
 #[test]
 fn the_large_building_closes_no_false_loop() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("sim-scenes/large-building.json");
     let scene = pcaline_io::read_scene(&path).unwrap();
     let sim = pcaline_sim::Simulator::new(&scene, 1).unwrap();
+    let truth = sim.true_poses();
+    // No true pose lies within 1 m of one 8 m or more of travel earlier (the
+    // loop search's `min_loop_path_m`): the scene has no right loop to close.
+    let mut travelled = vec![0.0f64];
+    for w in truth.windows(2) {
+        let d = w[0].between(&w[1]);
+        travelled.push(travelled.last().unwrap() + d.x().hypot(d.y()));
+    }
+    let revisit = (0..truth.len()).step_by(10).find(|&i| {
+        (0..i).any(|j| {
+            let d = truth[j].between(&truth[i]);
+            travelled[i] - travelled[j] >= 8.0 && d.x().hypot(d.y()) < 1.0
+        })
+    });
+    assert_eq!(revisit, None, "the scene comes back to a place");
+
     let mut detector = LineDetector::new(Config::default()).unwrap();
     let estimator = AidingConfig::estimator();
     let run = pcaline_eval::AidedRun::run_with_loop_closure(
@@ -369,18 +386,17 @@ fn the_large_building_closes_no_false_loop() {
     )
     .unwrap();
     let slam = run.loop_closing().unwrap();
-    let truth = sim.true_poses();
-    for r in slam.loops().iter().filter(|r| r.outcome == LoopOutcome::Accepted) {
-        let (k, j) = (slam.keyframes()[r.keyframe].scan, slam.keyframes()[r.candidate].scan);
-        let e = truth[j].between(&truth[k]).between(&r.candidate_from_current);
-        assert!(e.x().hypot(e.y()) < 0.2, "a false loop stands: {r:?}, off by {e:?}");
+    // Measured (2026-12-05): 8 loops verified, each a twin cell 3-4.2 m from
+    // where the estimate places the scan, all refused by the look-alike place
+    // search. Without it two of them were confirmed into the graph and
+    // switched off by the optimizer.
+    for r in slam.loops() {
+        assert!(r.edge.is_none(), "a false loop entered the graph: {r:?}");
     }
     let scores = run.scores(truth).unwrap();
     let (alone, loops) = (&scores[0].errors, &scores[1].errors);
-    // Measured: 5.1 cm alone, 5.1 cm with loop closure: the look-alike
-    // place search (the default since 2026-12-04, fifteenth session)
-    // refuses every loop here, each cell's twin lying within the loop's
-    // search radius; 4.7 cm with loop closure before it.
+    // Measured: 5.3 cm both (`pcaline run`); 4.8 cm before the place search,
+    // from the map rebuilt after the two false loops' optimizations.
     assert!(loops.position_rms_m < alone.position_rms_m + 0.01, "{alone:?} {loops:?}");
     assert!(loops.heading_rms_rad < alone.heading_rms_rad + 0.01f64.to_radians());
 }

@@ -149,8 +149,9 @@ pub struct LoopClosureConfig {
     /// off stands in 3 runs instead of 29, and the rigid heading rms with
     /// loops averages 9.7° instead of 10.9°; the logs' own poses and the
     /// drift grid move as little as without it, and `pcaline map` takes 2-3x
-    /// as long. In a maze of identical cells every loop has a twin within
-    /// its radius and none stands (the shipped large building). Larger
+    /// as long. In the shipped large building (identical 3 m cells, a path
+    /// that never comes back to a place) it refuses every loop found, each
+    /// a twin cell 3-4 m off, before any reaches the graph. Larger
     /// scales refuse right loops too (at 4 CSAIL keeps 3 loops, and with a
     /// heading bias on Intel the first right loops into the start room are
     /// refused because its twin is down the corridor); 0 turns the search
