@@ -592,36 +592,98 @@ fn mcap_file_messages(
     let len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
     let options = mcap::sans_io::LinearReaderOptions::default()
         .with_record_length_limit(usize::try_from(len).unwrap_or(usize::MAX));
-    let reader = mcap::io::MessageReader::new_with_options(std::io::BufReader::new(file), options);
-    for (index, message) in reader.enumerate() {
-        let message = message
-            .map_err(|e| IoError::parse(path, None, format!("after message {index}: {e}")))?;
-        let ch = &message.channel;
-        let schema = ch.schema.as_ref().map_or("", |s| s.name.as_str());
+    let mut index = 0;
+    each_mcap_message(path, file, options, |channel, data| {
+        index += 1;
+        let schema = channel.schema.as_ref().map_or("", |s| s.name.as_str());
         let of_type =
-            wanted.iter().enumerate().find_map(|(k, w)| match ch.message_encoding.as_str() {
+            wanted.iter().enumerate().find_map(|(k, w)| match channel.message_encoding.as_str() {
                 "cdr" if schema == w.ros2_type => Some((k, Encoding::Cdr)),
                 "ros1" if schema == w.ros1_type => Some((k, Encoding::Ros1)),
                 _ => None,
             });
-        let Some((kind, encoding)) = of_type else { continue };
-        if !pass.topics[kind].contains(&ch.topic) {
-            pass.topics[kind].insert(ch.topic.clone());
+        let Some((kind, encoding)) = of_type else { return Ok(ControlFlow::Continue(())) };
+        if !pass.topics[kind].contains(&channel.topic) {
+            pass.topics[kind].insert(channel.topic.clone());
         }
-        if wanted[kind].topic.is_some_and(|t| t != ch.topic) {
-            continue;
+        if wanted[kind].topic.is_some_and(|t| t != channel.topic) {
+            return Ok(ControlFlow::Continue(()));
         }
-        let message = Message {
-            file: path,
-            topic: &ch.topic,
-            kind,
-            position: index + 1,
-            encoding,
-            data: &message.data,
-        };
-        if visit(message)?.is_break() {
+        let message =
+            Message { file: path, topic: &channel.topic, kind, position: index, encoding, data };
+        let flow = visit(message)?;
+        if flow.is_break() {
             pass.stopped = true;
-            return Ok(());
+        }
+        Ok(flow)
+    })
+}
+
+/// Calls `f` with each message of the MCAP file `path` (opened as `file`)
+/// and its channel, in file order, until `f` breaks or fails.
+///
+/// It drives the crate's sans-io reader itself and parses only the records
+/// a message needs: schemas, channels and messages. The crate's own
+/// message reader parses every record, and its parser panics on some
+/// malformed records of other kinds (mcap 0.26: an attachment whose body is
+/// shorter than its header, found by the `mcap` fuzz target); those are now
+/// skipped like the summary's indexes. Schemas and channels are linked with
+/// the crate's checks ([`mcap::read::ChannelAccumulator`]: a redefinition
+/// must match, a channel's schema must come first). The file is read to its
+/// end magic, so a truncated file is an error after its last message.
+fn each_mcap_message(
+    path: &Path,
+    file: std::fs::File,
+    options: mcap::sans_io::LinearReaderOptions,
+    mut f: impl FnMut(&mcap::Channel<'static>, &[u8]) -> Result<ControlFlow<()>, IoError>,
+) -> Result<(), IoError> {
+    use mcap::records::op;
+    use mcap::sans_io::{LinearReadEvent, LinearReader};
+    use std::io::Read;
+    let mut source = std::io::BufReader::new(file);
+    let mut reader = LinearReader::new_with_options(options.with_emit_chunks(false));
+    let mut channels = mcap::read::ChannelAccumulator::default();
+    let mut messages = 0usize;
+    let error = |messages: usize, e: mcap::McapError| {
+        IoError::parse(path, None, format!("after message {messages}: {e}"))
+    };
+    while let Some(event) = reader.next_event() {
+        match event.map_err(|e| error(messages, e))? {
+            LinearReadEvent::ReadRequest(need) => {
+                let read = loop {
+                    match source.read(reader.insert(need)) {
+                        Ok(n) => break n,
+                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                        Err(e) => return Err(IoError::io(path, e)),
+                    }
+                };
+                reader.notify_read(read);
+            }
+            LinearReadEvent::Record { opcode, data } => {
+                if !matches!(opcode, op::SCHEMA | op::CHANNEL | op::MESSAGE) {
+                    continue;
+                }
+                match mcap::parse_record(opcode, data).map_err(|e| error(messages, e))? {
+                    mcap::records::Record::Schema { header, data } => channels
+                        .add_schema(header, std::borrow::Cow::Owned(data.into_owned()))
+                        .map_err(|e| error(messages, e))?,
+                    mcap::records::Record::Channel(channel) => {
+                        channels.add_channel(channel).map_err(|e| error(messages, e))?
+                    }
+                    mcap::records::Record::Message { header, data } => {
+                        let Some(channel) = channels.get(header.channel_id) else {
+                            let e =
+                                mcap::McapError::UnknownChannel(header.sequence, header.channel_id);
+                            return Err(error(messages, e));
+                        };
+                        messages += 1;
+                        if f(&channel, &data)?.is_break() {
+                            return Ok(());
+                        }
+                    }
+                    _ => {}
+                }
+            }
         }
     }
     Ok(())
@@ -970,6 +1032,68 @@ mod tests {
             ),
             "{e}"
         );
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    /// An attachment record whose body is shorter than its own header and
+    /// CRC panicked the mcap crate's parser (mcap 0.26, found by the `mcap`
+    /// fuzz target). The reader parses only schemas, channels and messages:
+    /// such an attachment in a good file is skipped and its scans read; in
+    /// the fuzzer's truncated file it is an error naming the file.
+    #[test]
+    fn an_attachment_shorter_than_its_header_is_skipped_not_a_panic() {
+        let path = std::env::temp_dir().join(format!("pcaline-att-{}.mcap", std::process::id()));
+        let scans: Vec<Scan> = (0..3)
+            .map(|k| Scan::new(-1.0, 0.01, 0.1, 30.0, vec![2.0; 100]).with_stamp(k as f64))
+            .collect();
+        let mut bytes = Vec::new();
+        {
+            let mut w = mcap::Writer::new(std::io::Cursor::new(&mut bytes)).unwrap();
+            let schema = w.add_schema(ROS2_TYPE, "ros2msg", b"").unwrap();
+            let ch = w.add_channel(schema, "/scan", "cdr", &BTreeMap::new()).unwrap();
+            for (k, s) in scans.iter().enumerate() {
+                let header = mcap::records::MessageHeader {
+                    channel_id: ch,
+                    sequence: k as u32,
+                    log_time: k as u64,
+                    publish_time: k as u64,
+                };
+                w.write_to_known_channel(&header, &encode_laserscan_cdr(s, "laser")).unwrap();
+            }
+            w.finish().unwrap();
+        }
+        // After the magic (8 bytes) and the header record (opcode, u64
+        // length, body): an attachment of two times, two empty strings and
+        // a zero data length (32 bytes), with no room for its CRC.
+        let header_len = u64::from_le_bytes(bytes[9..17].try_into().unwrap()) as usize;
+        let at = 8 + 9 + header_len;
+        let mut attachment = vec![mcap::records::op::ATTACHMENT];
+        attachment.extend_from_slice(&32u64.to_le_bytes());
+        attachment.extend_from_slice(&[0u8; 32]);
+        bytes.splice(at..at, attachment);
+        std::fs::write(&path, &bytes).unwrap();
+        let mut got = Vec::new();
+        read_mcap(&path, Some("/scan"), Echo::First, &mut |r| {
+            if let LogRecord::Scan(s) = r {
+                got.push(s.scan);
+            }
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        assert_eq!(got, scans);
+
+        // The fuzzer's input: the magic, then such an attachment, then the
+        // end of the file.
+        let fuzzed: [u8; 58] = [
+            137, 77, 67, 65, 80, 48, 13, 10, 9, 41, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0,
+            0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 8, 0, 0, 0, 109, 99, 97, 112, 45, 112, 121, 116, 104,
+            111, 110, 47, 49, 46, 0, 0, 0,
+        ];
+        std::fs::write(&path, fuzzed).unwrap();
+        let e = read_mcap(&path, None, Echo::First, &mut |_| ControlFlow::Continue(()))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&path.display().to_string()), "{e}");
         std::fs::remove_file(&path).unwrap();
     }
 
