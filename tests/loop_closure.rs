@@ -236,29 +236,30 @@ fn csail_loop_closure_is_ahead_over_the_sensitivity_runs() {
     // 2026-12-04, fourteenth session) 12.75° with loops, and over seeds
     // 33-96 13.47° (11.09° with it) against 13.27° alone. Before the speed
     // scale learnt (2026-12-04): 12.28° and 14.69°.
+    // With loop searches 8 keyframes apart (2026-12-05): 9.71° with loops;
+    // over seeds 33-96 9.92° (9.72° 5 apart), with no loop 0.5 m off in any
+    // of the 96 runs (3 runs 5 apart).
     assert!(with_loops < alone, "with loops {with_loops:.2}°, alone {alone:.2}°");
     assert!(with_loops < 12.0, "with loops {with_loops:.2}°");
+    // Every run closes loops. Measured: 4 standing and checked at seed 31,
+    // the fewest (`pcaline eval --real --drift-grid --sensitivity-seeds 32`
+    // counts 3 there), median 9; with searches 5 keyframes apart at least
+    // 6, median 12.
     for r in &runs {
-        assert!(r.loops.standing >= 5, "seed {}: {:?}", r.seed, r.loops);
+        assert!(r.loops.standing >= 3, "seed {}: {:?}", r.seed, r.loops);
     }
 }
 
-/// Known defect (issue "Globally consistent line maps"): in 1 of the 8
-/// sensitivity runs (seed 5) a pair of loops stands that the corrected
-/// poses contradict (by 6.2 m): two neighbouring keyframes aligned to a
-/// look-alike place along a repeated corridor where the drifted estimate
-/// lies, each confirming the other, with 15-17 m of wall matched and no
-/// other place in the map that fits. (Seeds 5 and 6 before the look-alike
-/// place search became the default, 2026-12-04, fifteenth session; over
-/// seeds 1-96 it left 3 such runs of 29. On the log as it is, a pair 2.0 m
-/// off stood then; 0.37 m at most before place recognition,
-/// 2026-12-04, which leaves seeds 1-8 as they were.) (5 of 8, 2.0-2.7 m, before the speed
-/// scale learnt, 2026-12-04; 7 of 8 with the chain's noise floored at a
-/// quarter of the wheel-odometry model; before the source's latency was
-/// estimated, 6 of 8, up to 12.5 m.) Run with `cargo test --release --test
-/// loop_closure -- --ignored`.
+/// No sensitivity run keeps a false loop: a loop the corrected poses
+/// contradict by 0.5 m or more. Measured (2026-12-05): the worst standing
+/// loop of seeds 1-8 is 0.47 m off, and none of seeds 1-96 keeps one 0.5 m
+/// off (`pcaline eval --real --drift-grid --sensitivity-seeds 96`). This
+/// was a known defect, ignored, until loop searches were spaced 8 keyframes
+/// apart (`LoopClosureConfig::loop_spacing_keyframes`): with 5, seed 5 kept
+/// a pair 6.2 m off, two neighbouring keyframes aligned to a look-alike
+/// place along a repeated corridor, each confirming the other (3 runs of
+/// 96; before the look-alike place search, 29).
 #[test]
-#[ignore = "known defect: a false loop stands in 1 of 8 sensitivity runs"]
 fn csail_no_false_loop_stands_in_any_sensitivity_run() {
     let Some(dir) = data("mit-csail") else { return };
     for r in csail_sensitivity_runs(&dir, LoopClosureConfig::standard(), &SENSITIVITY_SEEDS) {
