@@ -592,9 +592,7 @@ fn mcap_file_messages(
     let len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
     let options = mcap::sans_io::LinearReaderOptions::default()
         .with_record_length_limit(usize::try_from(len).unwrap_or(usize::MAX));
-    let mut index = 0;
-    each_mcap_message(path, file, options, |channel, data| {
-        index += 1;
+    each_mcap_message(path, file, options, |position, channel, data| {
         let schema = channel.schema.as_ref().map_or("", |s| s.name.as_str());
         let of_type =
             wanted.iter().enumerate().find_map(|(k, w)| match channel.message_encoding.as_str() {
@@ -609,8 +607,7 @@ fn mcap_file_messages(
         if wanted[kind].topic.is_some_and(|t| t != channel.topic) {
             return Ok(ControlFlow::Continue(()));
         }
-        let message =
-            Message { file: path, topic: &channel.topic, kind, position: index, encoding, data };
+        let message = Message { file: path, topic: &channel.topic, kind, position, encoding, data };
         let flow = visit(message)?;
         if flow.is_break() {
             pass.stopped = true;
@@ -619,8 +616,9 @@ fn mcap_file_messages(
     })
 }
 
-/// Calls `f` with each message of the MCAP file `path` (opened as `file`)
-/// and its channel, in file order, until `f` breaks or fails.
+/// Calls `f` with each message of the MCAP file `path` (opened as `file`),
+/// its position in the file (counted from 1) and its channel, in file
+/// order, until `f` breaks or fails.
 ///
 /// It drives the crate's sans-io reader itself and parses only the records
 /// a message needs: schemas, channels and messages. The crate's own
@@ -635,7 +633,7 @@ fn each_mcap_message(
     path: &Path,
     file: std::fs::File,
     options: mcap::sans_io::LinearReaderOptions,
-    mut f: impl FnMut(&mcap::Channel<'static>, &[u8]) -> Result<ControlFlow<()>, IoError>,
+    mut f: impl FnMut(usize, &mcap::Channel<'static>, &[u8]) -> Result<ControlFlow<()>, IoError>,
 ) -> Result<(), IoError> {
     use mcap::records::op;
     use mcap::sans_io::{LinearReadEvent, LinearReader};
@@ -665,7 +663,7 @@ fn each_mcap_message(
                 }
                 match mcap::parse_record(opcode, data).map_err(|e| error(messages, e))? {
                     mcap::records::Record::Schema { header, data } => channels
-                        .add_schema(header, std::borrow::Cow::Owned(data.into_owned()))
+                        .add_schema_from_slice(header, &data)
                         .map_err(|e| error(messages, e))?,
                     mcap::records::Record::Channel(channel) => {
                         channels.add_channel(channel).map_err(|e| error(messages, e))?
@@ -677,7 +675,7 @@ fn each_mcap_message(
                             return Err(error(messages, e));
                         };
                         messages += 1;
-                        if f(&channel, &data)?.is_break() {
+                        if f(messages, &channel, &data)?.is_break() {
                             return Ok(());
                         }
                     }
