@@ -839,7 +839,7 @@ fn print_intel(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
         r.intel_drift_seed
     )?;
     outln!(
-        "{:<32} {:>9} {:>9} {:>17} {:>17}",
+        "{:<40} {:>9} {:>9} {:>17} {:>17}",
         "trajectory",
         "relations",
         "unmatched",
@@ -848,7 +848,7 @@ fn print_intel(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
     )?;
     for t in &r.intel {
         outln!(
-            "{:<32} {:>9} {:>9} {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
+            "{:<40} {:>9} {:>9} {:>8.3} ± {:<6.3} {:>8.3} ± {:<6.3}",
             t.name,
             t.relations.scored,
             t.relations.unmatched,
@@ -858,6 +858,11 @@ fn print_intel(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             t.relations.rotation_std_deg
         )?;
     }
+    outln!(
+        "(Between scans, an online mode composes the odometry since the last scan; a loop-closing \
+         mode, optimized after the run, blends it with the odometry to the next scan, as the \
+         second row does with the log's own poses. Pose moves are measured at the scans.)"
+    )?;
     print_loops(&r.intel_loops)
 }
 

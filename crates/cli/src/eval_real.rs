@@ -616,6 +616,8 @@ impl LoopRow {
 /// A record of the Intel log in time order: its time, corrected pose and
 /// the lines of its scan, if it is one (detected once, shared by every run).
 struct IntelRecord {
+    /// The record's place in the log (the records are kept in time order).
+    log_index: usize,
     time_s: f64,
     pose: Pose2,
     lines: Option<Vec<SensorLine>>,
@@ -681,13 +683,17 @@ fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> 
     let mut detector = LineDetector::new(config.detector)?;
     let mut records = Vec::new();
     for record in CarmenReader::open(&log, options)? {
+        let log_index = records.len();
         records.push(match record? {
             LogRecord::Scan(s) => IntelRecord {
+                log_index,
                 time_s: s.scan.stamp_s.context("a FLASER line without a timestamp")?,
                 pose: s.pose.context("a FLASER line without a pose")?,
                 lines: Some(detector.detect(&s.scan).lines.iter().map(SensorLine::from).collect()),
             },
-            LogRecord::Odometry(o) => IntelRecord { time_s: o.stamp_s, pose: o.pose, lines: None },
+            LogRecord::Odometry(o) => {
+                IntelRecord { log_index, time_s: o.stamp_s, pose: o.pose, lines: None }
+            }
             // A CARMEN log has scans and odometry only.
             _ => continue,
         });
@@ -697,10 +703,21 @@ fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> 
 }
 
 /// Each mode's pose at every record with `source` (one pose per record) as
-/// the localization source: at a scan, its aiding loop's output; between
-/// scans, the source's motion since the last scan composed onto it. With
-/// them, the loops of each loop-closing mode checked against `reference`,
-/// the corrected pose of each scan (exact: the drift is added to them).
+/// the localization source, with the loops of each loop-closing mode checked
+/// against `reference`, the corrected pose of each scan (exact: the drift is
+/// added to them).
+///
+/// At a scan, the pose is the aiding loop's output (the optimized one for a
+/// loop-closing mode). Between scans, the records are placed along the log's
+/// own order, not their stamps: in `intel.gfs.log` the odometry lines before
+/// a scan are stamped up to a second after it, and are raw odometry composed
+/// on the previous scan's corrected pose. An online mode composes the
+/// source's motion since the log's last scan onto that scan's pose. A
+/// loop-closing mode's trajectory is optimized after the run, so between two
+/// scans it also knows the next: each record is blended, by its place among
+/// the records between the scans, from the motion since the last scan and the
+/// motion to the last odometry record before the next scan, which stands for
+/// the odometry at that scan.
 fn intel_run(
     records: &[IntelRecord],
     source: &[Pose2],
@@ -708,48 +725,100 @@ fn intel_run(
     config: &NamedConfig,
 ) -> Result<(Vec<Vec<Pose2>>, Vec<LoopRow>)> {
     let mut loops = runners(config)?;
-    let mut out: Vec<Vec<Pose2>> = vec![Vec::with_capacity(records.len()); loops.len()];
-    let mut at_last_scan: Option<(Pose2, Vec<Pose2>)> = None;
-    // Each record's last scan (counted) and the source's motion since it.
-    let mut since_scan: Vec<Option<(usize, Pose2)>> = Vec::with_capacity(records.len());
-    let mut scans = 0;
-    for (record, source) in records.iter().zip(source) {
-        let poses: Vec<Pose2> = match (&record.lines, &at_last_scan) {
-            (Some(lines), _) => {
-                let poses: Vec<Pose2> = loops
-                    .iter_mut()
-                    .map(|a| a.step_with(Some(record.time_s), source, lines).0)
-                    .collect();
-                at_last_scan = Some((*source, poses.clone()));
-                since_scan.push(Some((scans, Pose2::default())));
-                scans += 1;
-                poses
+    // Every scan stepped in time order; each mode's pose at each scan record.
+    let mut at_scan: Vec<Vec<Option<Pose2>>> = vec![vec![None; records.len()]; loops.len()];
+    let mut scan_records = Vec::new();
+    for (i, (record, source)) in records.iter().zip(source).enumerate() {
+        if let Some(lines) = &record.lines {
+            for (runner, poses) in loops.iter_mut().zip(&mut at_scan) {
+                poses[i] = Some(runner.step_with(Some(record.time_s), source, lines).0);
             }
-            (None, Some((source_then, poses))) => {
-                let motion = source_then.between(source);
-                since_scan.push(Some((scans - 1, motion)));
-                poses.iter().map(|p| p.compose(&motion)).collect()
-            }
-            (None, None) => {
-                since_scan.push(None);
-                vec![*source; loops.len()]
-            }
-        };
-        for (o, pose) in out.iter_mut().zip(poses) {
-            o.push(pose);
+            scan_records.push(i);
         }
     }
-    for (runner, o) in loops.iter_mut().zip(&mut out) {
-        if let Some(at_scans) = runner.finish() {
-            for (pose, since) in o.iter_mut().zip(&since_scan) {
-                if let Some(at) = since.and_then(|(k, motion)| Some(at_scans[k]?.compose(&motion)))
-                {
-                    *pose = at;
+    let mut optimized = vec![false; loops.len()];
+    for ((runner, poses), optimized) in loops.iter_mut().zip(&mut at_scan).zip(&mut optimized) {
+        if let Some(final_poses) = runner.finish() {
+            *optimized = true;
+            for (&i, pose) in scan_records.iter().zip(final_poses) {
+                if let Some(p) = pose {
+                    poses[i] = Some(p);
                 }
             }
         }
     }
+    let out = at_scan
+        .iter()
+        .zip(optimized)
+        .map(|(at_scan, optimized)| place_between_scans(records, source, at_scan, optimized))
+        .collect();
     Ok((out, check_loops(config, &loops, reference)))
+}
+
+/// A pose at every record from the poses at the scans (`at_scan`, one entry
+/// per record, `None` off the scans).
+///
+/// The records before the first scan keep `source`. The others are placed
+/// along the log's own order, not their stamps: in `intel.gfs.log` the
+/// odometry lines before a scan are stamped up to a second after it, and are
+/// raw odometry composed on the previous scan's corrected pose. Each record
+/// takes the source's motion since the log's last scan, composed onto that
+/// scan's pose. With `smooth` (a trajectory optimized after the run, which
+/// knows the next scan too), the records between two scans are also placed
+/// back from the next scan, by the source's motion to the last record before
+/// it (which stands for the odometry at that scan), and the two placements
+/// are blended by the record's place among them.
+fn place_between_scans(
+    records: &[IntelRecord],
+    source: &[Pose2],
+    at_scan: &[Option<Pose2>],
+    smooth: bool,
+) -> Vec<Pose2> {
+    let mut log_order: Vec<usize> = (0..records.len()).collect();
+    log_order.sort_by_key(|&i| records[i].log_index);
+    let mut out = source.to_vec();
+    let mut last_scan: Option<(usize, Pose2)> = None;
+    let mut between: Vec<usize> = Vec::new();
+    // The records in the log's order, one run between scans at a time (the
+    // end of the log closes the last run).
+    for i in log_order.into_iter().map(Some).chain([None]) {
+        let next_scan = match i {
+            Some(i) if records[i].lines.is_none() => {
+                between.push(i);
+                continue;
+            }
+            Some(i) => Some((i, at_scan[i].unwrap_or(source[i]))),
+            None => None,
+        };
+        if let Some((k, at_k)) = last_scan {
+            let next = next_scan
+                .filter(|_| smooth)
+                .and_then(|(_, at_next)| Some((at_next, source[*between.last()?])));
+            for (j, &r) in between.iter().enumerate() {
+                let forward = at_k.compose(&source[k].between(&source[r]));
+                out[r] = match next {
+                    Some((at_next, source_end)) => {
+                        let backward = at_next.compose(&source_end.between(&source[r]));
+                        blend(&forward, &backward, (j + 1) as f64 / between.len() as f64)
+                    }
+                    None => forward,
+                };
+            }
+        }
+        if let Some((n, at_n)) = next_scan {
+            out[n] = at_n;
+            last_scan = Some((n, at_n));
+        }
+        between.clear();
+    }
+    out
+}
+
+/// The pose a fraction `f` of the way from `from` to `to`, along the motion
+/// between them taken as straight (`f` = 0 gives `from`, 1 gives `to`).
+fn blend(from: &Pose2, to: &Pose2, f: f64) -> Pose2 {
+    let d = from.between(to);
+    from.compose(&Pose2::new(f * d.x(), f * d.y(), f * d.heading()))
 }
 
 /// The relation metric of poses at the Intel records' times.
@@ -799,10 +868,18 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
         rigid_position_rms_m: None,
         relations,
     };
-    let mut rows = vec![row(
-        "log's own (GMapping) poses".into(),
-        intel_score(&records, &relations, &corrected)?,
-    )];
+    // The log's own poses between scans as a loop-closing mode places its
+    // own: the reference for the optimized trajectories.
+    let own_at_scans: Vec<Option<Pose2>> =
+        records.iter().map(|r| r.lines.as_ref().map(|_| r.pose)).collect();
+    let own_smoothed = place_between_scans(&records, &corrected, &own_at_scans, true);
+    let mut rows = vec![
+        row("log's own (GMapping) poses".into(), intel_score(&records, &relations, &corrected)?),
+        row(
+            "log's own poses, blended between scans".into(),
+            intel_score(&records, &relations, &own_smoothed)?,
+        ),
+    ];
     let drifted = INTEL_DRIFT.corrupt_stamped(&corrected, &times, seed);
     let grid_cells: Vec<(f64, u64)> = if grid {
         DRIFT_GRID_BIAS_DEG_S
@@ -846,7 +923,10 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
     }
     let mut moved = Vec::new();
     for ((name, _, _), poses) in modes(config).iter().zip(own_runs) {
-        let e = trajectory_errors(&poses, &corrected).context("no poses")?;
+        // At the scans, as `pcaline map` writes them: between scans the log
+        // has raw odometry hung on the last scan, not GMapping's estimates.
+        let e = trajectory_errors(&at_scans(&records, &poses), &at_scans(&records, &corrected))
+            .context("no poses")?;
         moved.push(MovedRow {
             log: "intel.gfs.log".into(),
             mode: name.to_string(),
@@ -994,4 +1074,70 @@ pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport>
         occupied_cells_not_moving: cells[1].count(),
         occupied_cells_lidar_only_without_deskew: cells[2].count(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(log_index: usize, time_s: f64, pose: Pose2, scan: bool) -> IntelRecord {
+        IntelRecord { log_index, time_s, pose, lines: scan.then(Vec::new) }
+    }
+
+    fn close(a: &Pose2, b: &Pose2) -> bool {
+        (a.x() - b.x()).abs() < 1e-9
+            && (a.y() - b.y()).abs() < 1e-9
+            && pcaline::geometry::wrap_angle(a.heading() - b.heading()).abs() < 1e-9
+    }
+
+    /// A scan, two odometry records 1 m apart, a scan. The second odometry
+    /// record is stamped after the last scan (as in `intel.gfs.log`), so in
+    /// time order it comes last; it still belongs between the scans.
+    fn run() -> (Vec<IntelRecord>, Vec<Pose2>) {
+        let source = vec![
+            Pose2::new(0.0, 0.0, 0.0),
+            Pose2::new(1.0, 0.0, 0.0),
+            Pose2::new(3.0, 0.0, 0.0),
+            Pose2::new(2.0, 0.0, 0.0),
+        ];
+        let records = vec![
+            record(0, 0.0, source[0], true),
+            record(1, 1.0, source[1], false),
+            record(3, 2.0, source[2], true),
+            record(2, 2.5, source[3], false),
+        ];
+        (records, source)
+    }
+
+    #[test]
+    fn an_online_trajectory_composes_the_odometry_since_the_scan_before_in_the_log() {
+        let (records, source) = run();
+        let at_scan =
+            [Some(Pose2::new(0.0, 1.0, 0.0)), None, Some(Pose2::new(3.0, 2.0, 0.0)), None];
+        let out = place_between_scans(&records, &source, &at_scan, false);
+        assert!(close(&out[0], &Pose2::new(0.0, 1.0, 0.0)));
+        assert!(close(&out[1], &Pose2::new(1.0, 1.0, 0.0)));
+        assert!(close(&out[2], &Pose2::new(3.0, 2.0, 0.0)));
+        // From the first scan, not from the second (which is earlier in time).
+        assert!(close(&out[3], &Pose2::new(2.0, 1.0, 0.0)), "{:?}", out[3]);
+    }
+
+    #[test]
+    fn an_optimized_trajectory_blends_toward_the_next_scan() {
+        let (records, source) = run();
+        let at_scan =
+            [Some(Pose2::new(0.0, 1.0, 0.0)), None, Some(Pose2::new(3.0, 2.0, 0.0)), None];
+        let out = place_between_scans(&records, &source, &at_scan, true);
+        // The last record before the next scan stands for the odometry at
+        // it: it takes the scan's pose. The one before is half way between
+        // the forward placement (1, 1) and the backward one (2, 2): the
+        // scan's pose less the source's 1 m from this record to the last.
+        assert!(close(&out[3], &Pose2::new(3.0, 2.0, 0.0)), "{:?}", out[3]);
+        assert!(close(&out[1], &Pose2::new(1.5, 1.5, 0.0)), "{:?}", out[1]);
+        // Before the first scan and without scans, the source stays.
+        let none = [None; 4];
+        let records: Vec<IntelRecord> =
+            (0..4).map(|i| record(i, i as f64, source[i], false)).collect();
+        assert_eq!(place_between_scans(&records, &source, &none, true), source);
+    }
 }
