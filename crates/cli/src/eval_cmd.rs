@@ -807,6 +807,14 @@ fn print_csail(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             t.relations.rotation_std_deg
         )?;
     }
+    if let Some(j) = &r.csail_reference_jitter {
+        outln!(
+            "the corrected poses' own jitter: on {} straight stretches between corrected scans (raw odometry turning under 0.5° a step, 6 scans at most) their heading changes differ from the raw odometry's by {:.2}° rms (each corrected heading about {:.2}°, which every heading rms against them carries)",
+            j.stretches,
+            j.heading_rms_deg,
+            j.heading_rms_deg / std::f64::consts::SQRT_2
+        )?;
+    }
     print_loops(&r.csail_loops)
 }
 

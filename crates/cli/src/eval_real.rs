@@ -149,6 +149,8 @@ pub struct RealReport {
     pub config: String,
     /// MIT CSAIL: scans with corrected poses.
     pub csail_pairs: usize,
+    /// MIT CSAIL: how far the corrected poses' own heading jitters.
+    pub csail_reference_jitter: Option<ReferenceJitter>,
     /// MIT CSAIL trajectories against the corrected poses (relations between
     /// consecutive corrected scans).
     pub csail: Vec<TrajectoryRow>,
@@ -343,7 +345,13 @@ pub fn evaluate(data: &Path, config: &NamedConfig, options: &RealOptions) -> Res
             )
         },
     );
-    let CsailResult { pairs: csail_pairs, rows: csail, loops: csail_loops, sensitivity } = csail?;
+    let CsailResult {
+        pairs: csail_pairs,
+        reference_jitter: csail_reference_jitter,
+        rows: csail,
+        loops: csail_loops,
+        sensitivity,
+    } = csail?;
     let IntelResult { rows: intel, moved: mut own_poses, cells: drift_grid, loops: intel_loops } =
         intel?;
     own_poses.extend(csail_own?);
@@ -351,6 +359,7 @@ pub fn evaluate(data: &Path, config: &NamedConfig, options: &RealOptions) -> Res
     Ok(RealReport {
         config: config.name.clone(),
         csail_pairs,
+        csail_reference_jitter,
         csail,
         csail_loops,
         csail_sensitivity: sensitivity,
@@ -477,13 +486,68 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
     } else {
         Vec::new()
     };
-    Ok(CsailResult { pairs: pairs.len(), rows, loops: loop_rows, sensitivity })
+    let reference_jitter = reference_jitter(&pairs, &sources);
+    Ok(CsailResult { pairs: pairs.len(), reference_jitter, rows, loops: loop_rows, sensitivity })
+}
+
+/// How far a reference's heading jitters from scan to scan, measured where
+/// the raw odometry is trustworthy: on straight stretches.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ReferenceJitter {
+    /// Stretches between consecutive corrected scans, at most
+    /// [`JITTER_MAX_SCANS`] raw scans apart, over which the raw odometry
+    /// turns less than [`JITTER_MAX_TURN_DEG`] at every step.
+    pub stretches: usize,
+    /// Rms of the corrected poses' heading change less the raw odometry's
+    /// over those stretches, degrees.
+    pub heading_rms_deg: f64,
+}
+
+/// The longest stretch [`ReferenceJitter`] takes, in raw scans.
+const JITTER_MAX_SCANS: usize = 6;
+/// The largest turn of a raw step on a stretch [`ReferenceJitter`] takes.
+const JITTER_MAX_TURN_DEG: f64 = 0.5;
+
+/// [`ReferenceJitter`] of `pairs` against the raw odometry `raw` (a pose
+/// per raw scan). Over a straight second of travel wheel odometry turns by
+/// a small fraction of a degree in error, and its latency cannot matter, so
+/// what the corrected heading change adds is the reference's own jitter:
+/// with a scatter independent from scan to scan, each corrected heading
+/// scatters by the rms over the square root of 2, which any heading error
+/// measured against the reference then carries. `None` without such a
+/// stretch.
+fn reference_jitter(pairs: &[pcaline_io::ScanPair], raw: &[Pose2]) -> Option<ReferenceJitter> {
+    let straight = |from: usize, to: usize| {
+        to > from
+            && to - from <= JITTER_MAX_SCANS
+            && to < raw.len()
+            && (from..to).all(|k| {
+                raw[k].between(&raw[k + 1]).heading().abs() < JITTER_MAX_TURN_DEG.to_radians()
+            })
+    };
+    let diffs: Vec<f64> = pairs
+        .windows(2)
+        .filter(|w| straight(w[0].raw_index, w[1].raw_index))
+        .map(|w| {
+            let corrected = w[0].corrected_pose.between(&w[1].corrected_pose).heading();
+            let odometry = raw[w[0].raw_index].between(&raw[w[1].raw_index]).heading();
+            pcaline::geometry::wrap_angle(corrected - odometry)
+        })
+        .collect();
+    (!diffs.is_empty()).then(|| ReferenceJitter {
+        stretches: diffs.len(),
+        heading_rms_deg: (diffs.iter().map(|d| d * d).sum::<f64>() / diffs.len() as f64)
+            .sqrt()
+            .to_degrees(),
+    })
 }
 
 /// What [`csail`] measures.
 struct CsailResult {
     /// Scans with corrected poses.
     pairs: usize,
+    /// The corrected poses' own heading jitter.
+    reference_jitter: Option<ReferenceJitter>,
     /// A row per mode.
     rows: Vec<TrajectoryRow>,
     /// The loops of the loop-closing modes.
@@ -1120,6 +1184,36 @@ mod tests {
         assert!(close(&out[2], &Pose2::new(3.0, 2.0, 0.0)));
         // From the first scan, not from the second (which is earlier in time).
         assert!(close(&out[3], &Pose2::new(2.0, 1.0, 0.0)), "{:?}", out[3]);
+    }
+
+    #[test]
+    fn the_reference_jitter_is_taken_on_straight_stretches_only() {
+        // Raw odometry straight along x, then a 10° turn a step; the
+        // reference adds +1° and -1° on alternate scans.
+        let raw: Vec<Pose2> = (0..12usize)
+            .map(|k| {
+                let turn = k.saturating_sub(6) as f64 * 10f64.to_radians();
+                Pose2::new(k as f64 * 0.2, 0.0, turn)
+            })
+            .collect();
+        let pairs: Vec<pcaline_io::ScanPair> = (0..12)
+            .step_by(2)
+            .map(|k| {
+                let jitter = if k % 4 == 0 { 1f64 } else { -1f64 }.to_radians();
+                let r = raw[k];
+                pcaline_io::ScanPair {
+                    corrected_index: k / 2,
+                    raw_index: k,
+                    raw_pose: r,
+                    corrected_pose: Pose2::new(r.x(), r.y(), r.heading() + jitter),
+                }
+            })
+            .collect();
+        let j = reference_jitter(&pairs, &raw).unwrap();
+        // 0-2, 2-4 and 4-6 are straight; 6-8 and on turn.
+        assert_eq!(j.stretches, 3);
+        assert!((j.heading_rms_deg - 2.0).abs() < 1e-9, "{j:?}");
+        assert!(reference_jitter(&pairs[3..], &raw).is_none());
     }
 
     #[test]
