@@ -680,8 +680,6 @@ impl LoopRow {
 /// A record of the Intel log in time order: its time, corrected pose and
 /// the lines of its scan, if it is one (detected once, shared by every run).
 struct IntelRecord {
-    /// The record's place in the log (the records are kept in time order).
-    log_index: usize,
     time_s: f64,
     pose: Pose2,
     lines: Option<Vec<SensorLine>>,
@@ -739,31 +737,42 @@ pub struct SensitivityRun {
     pub loops: Option<LoopRow>,
 }
 
+/// The Intel log's records in time order, with each scan's lines.
+struct IntelLog {
+    records: Vec<IntelRecord>,
+    /// Indices into `records` in the log's own order.
+    log_order: Vec<usize>,
+}
+
 /// The Intel log's records, time-ordered, with each scan's lines.
-fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> {
+fn intel_records(data: &Path, config: &NamedConfig) -> Result<IntelLog> {
     let mut options = CarmenOptions::default();
     options.time_offset_s = INTEL_TIME_OFFSET_S;
     let log = data.join("intel").join("intel.gfs.log");
     let mut detector = LineDetector::new(config.detector)?;
-    let mut records = Vec::new();
+    let mut in_log = Vec::new();
     for record in CarmenReader::open(&log, options)? {
-        let log_index = records.len();
-        records.push(match record? {
+        in_log.push(match record? {
             LogRecord::Scan(s) => IntelRecord {
-                log_index,
                 time_s: s.scan.stamp_s.context("a FLASER line without a timestamp")?,
                 pose: s.pose.context("a FLASER line without a pose")?,
                 lines: Some(detector.detect(&s.scan).lines.iter().map(SensorLine::from).collect()),
             },
-            LogRecord::Odometry(o) => {
-                IntelRecord { log_index, time_s: o.stamp_s, pose: o.pose, lines: None }
-            }
+            LogRecord::Odometry(o) => IntelRecord { time_s: o.stamp_s, pose: o.pose, lines: None },
             // A CARMEN log has scans and odometry only.
             _ => continue,
         });
     }
-    records.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
-    Ok(records)
+    // A stable sort: records stamped alike keep the log's order.
+    let mut by_time: Vec<usize> = (0..in_log.len()).collect();
+    by_time.sort_by(|&a, &b| in_log[a].time_s.total_cmp(&in_log[b].time_s));
+    let mut log_order = vec![0; in_log.len()];
+    for (k, &i) in by_time.iter().enumerate() {
+        log_order[i] = k;
+    }
+    let mut in_log: Vec<Option<IntelRecord>> = in_log.into_iter().map(Some).collect();
+    let records = by_time.iter().filter_map(|&i| in_log[i].take()).collect();
+    Ok(IntelLog { records, log_order })
 }
 
 /// Each mode's pose at every record with `source` (one pose per record) as
@@ -783,7 +792,7 @@ fn intel_records(data: &Path, config: &NamedConfig) -> Result<Vec<IntelRecord>> 
 /// motion to the last odometry record before the next scan, which stands for
 /// the odometry at that scan.
 fn intel_run(
-    records: &[IntelRecord],
+    IntelLog { records, log_order }: &IntelLog,
     source: &[Pose2],
     reference: &[Option<Pose2>],
     config: &NamedConfig,
@@ -814,13 +823,16 @@ fn intel_run(
     let out = at_scan
         .iter()
         .zip(optimized)
-        .map(|(at_scan, optimized)| place_between_scans(records, source, at_scan, optimized))
+        .map(|(at_scan, optimized)| {
+            place_between_scans(records, log_order, source, at_scan, optimized)
+        })
         .collect();
     Ok((out, check_loops(config, &loops, reference)))
 }
 
 /// A pose at every record from the poses at the scans (`at_scan`, one entry
-/// per record, `None` off the scans).
+/// per record, `None` off the scans); `log_order` gives the records' indices
+/// in the log's own order.
 ///
 /// The records before the first scan keep `source`. The others are placed
 /// along the log's own order, not their stamps: in `intel.gfs.log` the
@@ -834,18 +846,17 @@ fn intel_run(
 /// are blended by the record's place among them.
 fn place_between_scans(
     records: &[IntelRecord],
+    log_order: &[usize],
     source: &[Pose2],
     at_scan: &[Option<Pose2>],
     smooth: bool,
 ) -> Vec<Pose2> {
-    let mut log_order: Vec<usize> = (0..records.len()).collect();
-    log_order.sort_by_key(|&i| records[i].log_index);
     let mut out = source.to_vec();
     let mut last_scan: Option<(usize, Pose2)> = None;
     let mut between: Vec<usize> = Vec::new();
     // The records in the log's order, one run between scans at a time (the
     // end of the log closes the last run).
-    for i in log_order.into_iter().map(Some).chain([None]) {
+    for i in log_order.iter().copied().map(Some).chain([None]) {
         let next_scan = match i {
             Some(i) if records[i].lines.is_none() => {
                 between.push(i);
@@ -863,7 +874,7 @@ fn place_between_scans(
                 out[r] = match next {
                     Some((at_next, source_end)) => {
                         let backward = at_next.compose(&source_end.between(&source[r]));
-                        blend(&forward, &backward, (j + 1) as f64 / between.len() as f64)
+                        forward.lerp(&backward, (j + 1) as f64 / between.len() as f64)
                     }
                     None => forward,
                 };
@@ -876,13 +887,6 @@ fn place_between_scans(
         between.clear();
     }
     out
-}
-
-/// The pose a fraction `f` of the way from `from` to `to`, along the motion
-/// between them taken as straight (`f` = 0 gives `from`, 1 gives `to`).
-fn blend(from: &Pose2, to: &Pose2, f: f64) -> Pose2 {
-    let d = from.between(to);
-    from.compose(&Pose2::new(f * d.x(), f * d.y(), f * d.heading()))
 }
 
 /// The relation metric of poses at the Intel records' times.
@@ -919,7 +923,8 @@ fn drift_model(bias_deg_s: f64, seed: u64) -> OdometryModel {
 /// and the drift grid.
 fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<IntelResult> {
     let relations = read_relations(&data.join("intel").join("intel.relations"))?;
-    let records = intel_records(data, config)?;
+    let log = intel_records(data, config)?;
+    let records = &log.records;
     let corrected: Vec<Pose2> = records.iter().map(|r| r.pose).collect();
     let times: Vec<f64> = records.iter().map(|r| r.time_s).collect();
     let row = |name: String, relations: RelationRow| TrajectoryRow {
@@ -936,12 +941,13 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
     // own: the reference for the optimized trajectories.
     let own_at_scans: Vec<Option<Pose2>> =
         records.iter().map(|r| r.lines.as_ref().map(|_| r.pose)).collect();
-    let own_smoothed = place_between_scans(&records, &corrected, &own_at_scans, true);
+    let own_smoothed =
+        place_between_scans(records, &log.log_order, &corrected, &own_at_scans, true);
     let mut rows = vec![
-        row("log's own (GMapping) poses".into(), intel_score(&records, &relations, &corrected)?),
+        row("log's own (GMapping) poses".into(), intel_score(records, &relations, &corrected)?),
         row(
             "log's own poses, blended between scans".into(),
-            intel_score(&records, &relations, &own_smoothed)?,
+            intel_score(records, &relations, &own_smoothed)?,
         ),
     ];
     let drifted = INTEL_DRIFT.corrupt_stamped(&corrected, &times, seed);
@@ -962,7 +968,7 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
         })
         .collect();
     let at_scan_reference: Vec<Option<Pose2>> =
-        at_scans(&records, &corrected).into_iter().map(Some).collect();
+        at_scans(records, &corrected).into_iter().map(Some).collect();
     // Every run on the thread pool at once, gathered in order: the log's own
     // poses, the seeded drift, then the grid's cells.
     let sources: Vec<&[Pose2]> = [&corrected[..], &drifted[..]]
@@ -971,7 +977,7 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
         .collect();
     let mut runs = sources
         .par_iter()
-        .map(|source| intel_run(&records, source, &at_scan_reference, config))
+        .map(|source| intel_run(&log, source, &at_scan_reference, config))
         .collect::<Result<Vec<_>>>()?
         .into_iter();
     let (Some((own_runs, own_loops)), Some((drift_runs, drift_loops))) = (runs.next(), runs.next())
@@ -989,7 +995,7 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
     for ((name, _, _), poses) in modes(config).iter().zip(own_runs) {
         // At the scans, as `pcaline map` writes them: between scans the log
         // has raw odometry hung on the last scan, not GMapping's estimates.
-        let e = trajectory_errors(&at_scans(&records, &poses), &at_scans(&records, &corrected))
+        let e = trajectory_errors(&at_scans(records, &poses), &at_scans(records, &corrected))
             .context("no poses")?;
         moved.push(MovedRow {
             log: "intel.gfs.log".into(),
@@ -997,11 +1003,11 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
             heading_rms_deg: e.heading_rms_rad.to_degrees(),
             heading_max_deg: e.heading_max_rad.to_degrees(),
             position_rms_m: e.position_rms_m,
-            relations: Some(intel_score(&records, &relations, &poses)?),
+            relations: Some(intel_score(records, &relations, &poses)?),
         });
     }
     for ((name, _, _), poses) in modes(config).iter().zip(drift_runs) {
-        rows.push(row(format!("drifted, {name}"), intel_score(&records, &relations, &poses)?));
+        rows.push(row(format!("drifted, {name}"), intel_score(records, &relations, &poses)?));
     }
     let runs: Vec<Vec<Vec<Pose2>>> = runs.map(|(poses, _)| poses).collect();
     let cells = grid_cells
@@ -1016,8 +1022,8 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
                     // At the scans, aligned at the first scan: the drift
                     // before it is no aiding's to undo.
                     let e = aligned_trajectory_errors(
-                        &at_scans(&records, poses),
-                        &at_scans(&records, &corrected),
+                        &at_scans(records, poses),
+                        &at_scans(records, &corrected),
                     )
                     .context("no scans")?;
                     Ok(DriftCell {
@@ -1027,7 +1033,7 @@ fn intel(data: &Path, seed: u64, config: &NamedConfig, grid: bool) -> Result<Int
                         mode: name.to_string(),
                         heading_rms_deg: e.heading_rms_rad.to_degrees(),
                         position_rms_m: e.position_rms_m,
-                        relations: intel_score(&records, &relations, poses)?,
+                        relations: intel_score(records, &relations, poses)?,
                     })
                 })
                 .collect::<Result<Vec<_>>>()
@@ -1144,8 +1150,8 @@ pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport>
 mod tests {
     use super::*;
 
-    fn record(log_index: usize, time_s: f64, pose: Pose2, scan: bool) -> IntelRecord {
-        IntelRecord { log_index, time_s, pose, lines: scan.then(Vec::new) }
+    fn record(time_s: f64, pose: Pose2, scan: bool) -> IntelRecord {
+        IntelRecord { time_s, pose, lines: scan.then(Vec::new) }
     }
 
     fn close(a: &Pose2, b: &Pose2) -> bool {
@@ -1154,10 +1160,17 @@ mod tests {
             && pcaline::geometry::wrap_angle(a.heading() - b.heading()).abs() < 1e-9
     }
 
-    /// A scan, two odometry records 1 m apart, a scan. The second odometry
-    /// record is stamped after the last scan (as in `intel.gfs.log`), so in
-    /// time order it comes last; it still belongs between the scans.
-    fn run() -> (Vec<IntelRecord>, Vec<Pose2>) {
+    /// A scan, two odometry records 1 m apart, a scan, in time order; the
+    /// poses of the two scans. The second odometry record is stamped after
+    /// the last scan (as in `intel.gfs.log`), so in time order it comes last;
+    /// it still belongs between the scans.
+    struct Run {
+        log: IntelLog,
+        source: Vec<Pose2>,
+        at_scan: [Option<Pose2>; 4],
+    }
+
+    fn run() -> Run {
         let source = vec![
             Pose2::new(0.0, 0.0, 0.0),
             Pose2::new(1.0, 0.0, 0.0),
@@ -1165,20 +1178,22 @@ mod tests {
             Pose2::new(2.0, 0.0, 0.0),
         ];
         let records = vec![
-            record(0, 0.0, source[0], true),
-            record(1, 1.0, source[1], false),
-            record(3, 2.0, source[2], true),
-            record(2, 2.5, source[3], false),
+            record(0.0, source[0], true),
+            record(1.0, source[1], false),
+            record(2.0, source[2], true),
+            record(2.5, source[3], false),
         ];
-        (records, source)
+        Run {
+            log: IntelLog { records, log_order: vec![0, 1, 3, 2] },
+            source,
+            at_scan: [Some(Pose2::new(0.0, 1.0, 0.0)), None, Some(Pose2::new(3.0, 2.0, 0.0)), None],
+        }
     }
 
     #[test]
     fn an_online_trajectory_composes_the_odometry_since_the_scan_before_in_the_log() {
-        let (records, source) = run();
-        let at_scan =
-            [Some(Pose2::new(0.0, 1.0, 0.0)), None, Some(Pose2::new(3.0, 2.0, 0.0)), None];
-        let out = place_between_scans(&records, &source, &at_scan, false);
+        let Run { log, source, at_scan } = run();
+        let out = place_between_scans(&log.records, &log.log_order, &source, &at_scan, false);
         assert!(close(&out[0], &Pose2::new(0.0, 1.0, 0.0)));
         assert!(close(&out[1], &Pose2::new(1.0, 1.0, 0.0)));
         assert!(close(&out[2], &Pose2::new(3.0, 2.0, 0.0)));
@@ -1218,10 +1233,8 @@ mod tests {
 
     #[test]
     fn an_optimized_trajectory_blends_toward_the_next_scan() {
-        let (records, source) = run();
-        let at_scan =
-            [Some(Pose2::new(0.0, 1.0, 0.0)), None, Some(Pose2::new(3.0, 2.0, 0.0)), None];
-        let out = place_between_scans(&records, &source, &at_scan, true);
+        let Run { log, source, at_scan } = run();
+        let out = place_between_scans(&log.records, &log.log_order, &source, &at_scan, true);
         // The last record before the next scan stands for the odometry at
         // it: it takes the scan's pose. The one before is half way between
         // the forward placement (1, 1) and the backward one (2, 2): the
@@ -1231,7 +1244,7 @@ mod tests {
         // Before the first scan and without scans, the source stays.
         let none = [None; 4];
         let records: Vec<IntelRecord> =
-            (0..4).map(|i| record(i, i as f64, source[i], false)).collect();
-        assert_eq!(place_between_scans(&records, &source, &none, true), source);
+            (0..4).map(|i| record(i as f64, source[i], false)).collect();
+        assert_eq!(place_between_scans(&records, &[0, 1, 2, 3], &source, &none, true), source);
     }
 }
