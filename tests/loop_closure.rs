@@ -24,6 +24,7 @@ use pcaline_eval::{
     rigidly_aligned_trajectory_errors, trajectory_errors,
 };
 use pcaline_io::{CarmenOptions, CarmenReader, LogRecord, read_scan_pairs};
+use pcaline_sim::{MazeConfig, OdometrySpec, Simulator, generate_maze};
 use std::path::Path;
 
 /// Runs the estimator with loop closure over a CARMEN log with `source`
@@ -239,7 +240,9 @@ fn csail_loop_closure_is_ahead_over_the_sensitivity_runs() {
     // scale learnt (2026-12-04): 12.28° and 14.69°.
     // With loop searches 8 keyframes apart (2026-12-05): 9.71° with loops;
     // over seeds 33-96 9.92° (9.72° 5 apart), with no loop 0.5 m off in any
-    // of the 96 runs (3 runs 5 apart).
+    // of the 96 runs (3 runs 5 apart). With the alignment matching only
+    // lines facing the same way (2026-12-05, eighteenth session): 9.46°
+    // (range 7.98-14.16°, 7.98-19.65° before).
     assert!(with_loops < alone, "with loops {with_loops:.2}°, alone {alone:.2}°");
     assert!(with_loops < 12.0, "with loops {with_loops:.2}°");
     // Every run closes loops. Measured: 4 standing and checked at seed 31,
@@ -253,7 +256,8 @@ fn csail_loop_closure_is_ahead_over_the_sensitivity_runs() {
 
 /// No sensitivity run keeps a false loop: a loop the corrected poses
 /// contradict by 0.5 m or more. Measured (2026-12-05): the worst standing
-/// loop of seeds 1-8 is 0.47 m off, and none of seeds 1-96 keeps one 0.5 m
+/// loop of seeds 1-8 is 0.48 m off (0.47 m before the sided alignment, 2026-12-05,
+/// eighteenth session), and none of seeds 1-96 keeps one 0.5 m
 /// off (`pcaline eval --real --drift-grid --sensitivity-seeds 96`). This
 /// was a known defect, ignored, until loop searches were spaced 8 keyframes
 /// apart (`LoopClosureConfig::loop_spacing_keyframes`): with 5, seed 5 kept
@@ -271,28 +275,34 @@ fn csail_no_false_loop_stands_in_any_sensitivity_run() {
 }
 
 /// The look-alike place search (`LoopClosureConfig::place_search_scale`,
-/// 1 by default) refuses look-alike loops of the defect above: fewer
-/// sensitivity runs keep a false loop with it than without it, and at most
-/// one.
+/// 1 by default) pays over 32 sensitivity runs: loop closure's mean rigid
+/// heading rms is lower with it than without it. Without it, no run keeps a
+/// false loop (0.5 m or more off the corrected poses) either: the sided
+/// alignment (`Facing::Same`) refuses the look-alike loops along a repeated
+/// corridor that the search was first made for.
+///
+/// Measured (2026-12-05, eighteenth session): with the search 9.46°,
+/// without it 10.85°, and no false loop in any run either way. Before the
+/// sided alignment, without the search 11.20° with a false loop in 3 of the
+/// 32 runs (the worst 13.7 m off), with it 9.71° and none; at seeds 1-8,
+/// seed 5 kept a pair 6.2 m off with the search at scale 4 (2026-12-03),
+/// seeds 5 and 6 without it.
 #[test]
-fn csail_the_place_search_refuses_look_alike_loops() {
+fn csail_the_place_search_pays_over_the_sensitivity_runs() {
     let Some(dir) = data("mit-csail") else { return };
+    let seeds: Vec<u64> = (1..=32).collect();
     let mut off = LoopClosureConfig::standard();
     off.place_search_scale = 0.0;
-    // Runs in which a loop 0.5 m or more off the corrected poses stands.
-    let runs_with_false_loops = |config: LoopClosureConfig| -> Vec<u64> {
-        csail_sensitivity_runs(&dir, config, &SENSITIVITY_SEEDS)
-            .iter()
-            .filter(|r| r.loops.standing_errors.iter().any(|(m, _)| *m >= 0.5))
-            .map(|r| r.seed)
-            .collect()
-    };
-    let with = runs_with_false_loops(LoopClosureConfig::standard());
-    let without = runs_with_false_loops(off);
-    // Measured: seed 5 with the search (a pair 6.2 m off, 15-17 m of wall
-    // matched and no other place that fits); seeds 5 and 6 without. At
-    // scale 4 (2026-12-03): seed 5 only.
-    assert!(with.len() < without.len() && with.len() <= 1, "with {with:?}, without {without:?}");
+    let with = csail_sensitivity_runs(&dir, LoopClosureConfig::standard(), &seeds);
+    let without = csail_sensitivity_runs(&dir, off, &seeds);
+    let mean = |runs: &[SeedRun]| runs.iter().map(|r| r.with_loops_deg).sum::<f64>() / 32.0;
+    let (with_deg, without_deg) = (mean(&with), mean(&without));
+    assert!(with_deg < without_deg, "with the search {with_deg:.2}°, without {without_deg:.2}°");
+    for r in &without {
+        for (m, deg) in &r.loops.standing_errors {
+            assert!(*m < 0.5, "seed {}: a false loop stands: off by {m} m, {deg}°", r.seed);
+        }
+    }
 }
 
 /// The log's own corrected poses fed as the source through the estimator
@@ -401,4 +411,61 @@ fn the_large_building_closes_no_false_loop() {
     // from the map rebuilt after the two false loops' optimizations.
     assert!(loops.position_rms_m < alone.position_rms_m + 0.01, "{alone:?} {loops:?}");
     assert!(loops.heading_rms_rad < alone.heading_rms_rad + 0.01f64.to_radians());
+}
+
+/// A generated maze of walls 10 cm thick (seed 104, 4 x 5 cells, extra
+/// openings at 0.3, as `pcaline scene generate --seed 104 --cols 4 --rows 5
+/// --loops 0.3` writes it) driven with a drifting odometry (0.3°/s of
+/// heading-rate bias, 2% speed scale). The estimator alone keeps the heading
+/// within a few hundredths of a degree, so every loop closed must agree
+/// with the truth as well, or the graph does harm. Before the alignment
+/// matched only lines facing the same way (`Facing::Same`), the least
+/// squares let a wall's near face match its far face, the loops placed
+/// keyframes 1-4 cm and 0.1-0.3° off, and the optimized heading rms was
+/// 0.089° against the estimator's 0.032° alone (now 0.025°).
+#[test]
+fn loops_in_a_maze_of_thick_walls_agree_with_the_truth() {
+    let mut maze = MazeConfig::small("thick-walls").with_grid(4, 5);
+    maze.loop_probability = 0.3;
+    let mut scene = generate_maze(&maze, 104).unwrap();
+    scene.odometry = OdometrySpec {
+        heading_rate_bias_deg_s: 0.3,
+        heading_random_walk_deg_sqrt_s: 0.02,
+        speed_scale_error: 0.02,
+        position_random_walk_m_sqrt_s: 0.003,
+    };
+    let sim = Simulator::new(&scene, 1).unwrap();
+    let mut detector = LineDetector::new(Config::default()).unwrap();
+    let mut slam = LoopClosing::new(
+        AidingConfig::estimator(),
+        MapConfig::default(),
+        LoopClosureConfig::standard(),
+    )
+    .unwrap();
+    let mut truth = Vec::new();
+    let mut last: Option<(f64, Pose2)> = None;
+    for frame in sim.frames() {
+        let velocity =
+            last.and_then(|(t, p)| p.velocity_to(&frame.odometry_pose, frame.time_s - t));
+        last = Some((frame.time_s, frame.odometry_pose));
+        let lines: Vec<SensorLine> = detector
+            .detect_moving(&frame.scan, velocity.as_ref())
+            .lines
+            .iter()
+            .map(SensorLine::from)
+            .collect();
+        slam.step_at(frame.time_s, &frame.odometry_pose, &lines);
+        truth.push(Some(frame.true_pose));
+    }
+    slam.optimize();
+    let scans: Vec<usize> = slam.keyframes().iter().map(|k| k.scan).collect();
+    let check = LoopCheck::of(slam.loops(), &scans, &truth);
+    assert!(check.standing >= 6, "{check:?}");
+    for (m, deg) in &check.standing_errors {
+        assert!(*m < 0.01 && *deg < 0.1, "a loop {m} m, {deg}° off the truth: {check:?}");
+    }
+    let poses: Vec<Pose2> = slam.trajectory().into_iter().map(Option::unwrap).collect();
+    let truth: Vec<Pose2> = truth.into_iter().map(Option::unwrap).collect();
+    let e = trajectory_errors(&poses, &truth).unwrap();
+    assert!(e.heading_rms_rad.to_degrees() < 0.04, "{e:?}");
 }

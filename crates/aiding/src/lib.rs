@@ -47,7 +47,8 @@ pub use aiding::{Aiding, Association, MatchOutcome, ObservedLine, SensorLine};
 
 pub use heading::{MIN_D_RHO_M, heading_correction, rotate_step, weighted_offset};
 pub use line_alignment::{
-    Alignment, AlignmentConfig, AlignmentPrior, align_lines, laid_length, see_through_fraction,
+    Alignment, AlignmentConfig, AlignmentPrior, Facing, align_lines, laid_length,
+    see_through_fraction,
 };
 pub use line_measurement::{LineMeasurement, MeasurementNoise, measure};
 pub use localizer::Localizer;

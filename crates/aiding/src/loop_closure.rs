@@ -231,7 +231,7 @@ impl LoopClosureConfig {
             sequential_variance_scale: 1.0,
             loop_floor_m: 0.05,
             loop_floor_rad: 0.5f64.to_radians(),
-            alignment: AlignmentConfig::standard(),
+            alignment: AlignmentConfig::sided(),
             optimizer: OptimizerConfig::standard(),
             schedule: OptimizeSchedule::AfterLoop,
         }
@@ -855,13 +855,12 @@ impl LoopClosing {
         let here = self.graph.nodes[current];
         let first = current.saturating_sub(c.submap_keyframes);
         let current_seen = self.local_lines(current, first..=current);
-        let current_lines: Vec<LineSegment> = current_seen.iter().map(|(l, _)| *l).collect();
+        let current_lines: Vec<LineSegment> = facing_left(&current_seen);
         let mut accepted: Vec<VerifiedLoop> = Vec::new();
         for candidate in chosen {
             let j = candidate.keyframe;
             let candidate_seen = self.local_lines(j, self.candidate_stretch(j, first));
-            let candidate_lines: Vec<LineSegment> =
-                candidate_seen.iter().map(|(l, _)| *l).collect();
+            let candidate_lines: Vec<LineSegment> = facing_left(&candidate_seen);
             let prior = AlignmentPrior {
                 candidate_from_current: self.graph.nodes[j].between(&here),
                 radius_m: candidate.radius_m,
@@ -992,11 +991,8 @@ impl LoopClosing {
                 continue;
             }
             searched.push((k, node));
-            let lines: Vec<LineSegment> = self
-                .local_lines(k, self.candidate_stretch(k, first))
-                .into_iter()
-                .map(|(l, _)| l)
-                .collect();
+            let lines: Vec<LineSegment> =
+                facing_left(&self.local_lines(k, self.candidate_stretch(k, first)));
             let prior = AlignmentPrior {
                 candidate_from_current: node.between(&here),
                 radius_m: search_m,
@@ -1190,6 +1186,22 @@ struct PendingLoop {
     keyframe: usize,
     /// Its index in the loop records.
     record: usize,
+}
+
+/// Each line directed with its viewpoint on its left, so that the two faces
+/// of a wall, seen from either side, point opposite ways
+/// ([`crate::Facing::Same`]). A reversed line keeps only its ends, all
+/// that [`align_lines`] reads.
+fn facing_left(seen: &[(LineSegment, Point2<f64>)]) -> Vec<LineSegment> {
+    seen.iter()
+        .map(|(l, v)| {
+            if (l.end() - l.start()).perp(&(v - l.start())) < 0.0 {
+                LineSegment::between(l.end(), l.start())
+            } else {
+                *l
+            }
+        })
+        .collect()
 }
 
 /// A loop edge's covariance: the alignment's least-squares covariance for

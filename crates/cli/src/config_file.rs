@@ -627,6 +627,16 @@ mod tests {
         let path = write("bad-recovery.toml", &recovery(1.5));
         let e = resolve(path.to_str().unwrap(), 0.01).unwrap_err().to_string();
         assert!(e.contains("aiding.estimator.recovery.max_runner_up"), "{e}");
+        // A file naming some of loop closure's alignment keeps the rest,
+        // its facing rule included (a field newer than the file).
+        let path = write(
+            "alignment.toml",
+            "preset = \"default\"\n[loop_closure.alignment]\nrefine_iterations = 7\n",
+        );
+        let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
+        let mut expected = pcaline::aiding::AlignmentConfig::sided();
+        expected.refine_iterations = 7;
+        assert_eq!(c.loop_closure.alignment, expected);
         // The paper's map has no offset gate; a file may add one.
         let path = write("paper.json", r#"{"preset": "paper", "map": {"max_offset_m": 0.1}}"#);
         assert_eq!(resolve(path.to_str().unwrap(), 0.01).unwrap().map.max_offset_m, Some(0.1));
