@@ -1010,12 +1010,13 @@ fn print_sensitivity(runs: &[crate::eval_real::SensitivityRun]) -> anyhow::Resul
             of_mode().filter_map(|r| r.loops.as_ref()).collect();
         if !checked.is_empty() {
             let wrong = checked.iter().filter(|l| l.standing_wrong > 0).count();
-            let far = checked.iter().filter(|l| l.standing_error_m[1] >= 0.5).count();
-            // A run with no standing loop has NaN errors, which `max` skips.
-            let worst = checked.iter().map(|l| l.standing_error_m[1]).fold(0.0, f64::max);
+            let far = checked.iter().filter(|l| l.standing_false > 0).count();
+            let worst = checked.iter().map(|l| l.standing_worst_m).fold(0.0, f64::max);
             outln!(
-                "{name}: a wrong loop stands in {wrong} of {} runs, one 0.5 m or more off in {far} (worst {worst:.2} m)",
-                checked.len()
+                "{name}: a wrong loop stands in {wrong} of {} runs, one {} m or more off in {far} (worst {worst:.2} m; against the corrected poses carried over up to {} scans)",
+                checked.len(),
+                crate::eval_real::FALSE_LOOP_M,
+                crate::eval_real::CSAIL_FALSE_LOOP_GAP_SCANS,
             )?;
         }
     }
