@@ -20,8 +20,8 @@ use pcaline::aiding::{
 use pcaline::mapping::MapConfig;
 use pcaline::{Config, LineDetector, Pose2};
 use pcaline_eval::{
-    LoopCheck, SENSITIVITY_SEEDS, aligned_trajectory_errors, perturbed, reference_by_source,
-    rigidly_aligned_trajectory_errors, trajectory_errors,
+    AidedRun, LoopCheck, SENSITIVITY_SEEDS, aligned_trajectory_errors, perturbed,
+    reference_by_source, rigidly_aligned_trajectory_errors, trajectory_errors,
 };
 use pcaline_io::{CarmenOptions, CarmenReader, LogRecord, read_scan_pairs};
 use pcaline_sim::{MazeConfig, OdometrySpec, Simulator, generate_maze};
@@ -441,36 +441,30 @@ fn loops_in_a_maze_of_thick_walls_agree_with_the_truth() {
     };
     let sim = Simulator::new(&scene, 1).unwrap();
     let mut detector = LineDetector::new(Config::default()).unwrap();
-    let mut slam = LoopClosing::new(
-        AidingConfig::estimator(),
+    let mut truth = Vec::new();
+    // The estimator with loop closure alone (no other mode), as `pcaline
+    // run` feeds it: deskewed lines, the odometry as the source.
+    let run = AidedRun::run_with_loop_closure(
+        &sim,
         MapConfig::default(),
-        LoopClosureConfig::standard(),
+        &[],
+        Some((AidingConfig::estimator(), LoopClosureConfig::standard())),
+        |frame, velocity| {
+            truth.push(frame.true_pose);
+            let detection = detector.detect_moving(&frame.scan, velocity.as_ref());
+            detection.lines.iter().map(SensorLine::from).collect()
+        },
     )
     .unwrap();
-    let mut truth = Vec::new();
-    let mut last: Option<(f64, Pose2)> = None;
-    for frame in sim.frames() {
-        let velocity =
-            last.and_then(|(t, p)| p.velocity_to(&frame.odometry_pose, frame.time_s - t));
-        last = Some((frame.time_s, frame.odometry_pose));
-        let lines: Vec<SensorLine> = detector
-            .detect_moving(&frame.scan, velocity.as_ref())
-            .lines
-            .iter()
-            .map(SensorLine::from)
-            .collect();
-        slam.step_at(frame.time_s, &frame.odometry_pose, &lines);
-        truth.push(Some(frame.true_pose));
-    }
-    slam.optimize();
+    let slam = run.loop_closing().unwrap();
     let scans: Vec<usize> = slam.keyframes().iter().map(|k| k.scan).collect();
-    let check = LoopCheck::of(slam.loops(), &scans, &truth);
+    let reference: Vec<Option<Pose2>> = truth.iter().copied().map(Some).collect();
+    let check = LoopCheck::of(slam.loops(), &scans, &reference);
     assert!(check.standing >= 6, "{check:?}");
     for (m, deg) in &check.standing_errors {
         assert!(*m < 0.01 && *deg < 0.1, "a loop {m} m, {deg}° off the truth: {check:?}");
     }
-    let poses: Vec<Pose2> = slam.trajectory().into_iter().map(Option::unwrap).collect();
-    let truth: Vec<Pose2> = truth.into_iter().map(Option::unwrap).collect();
-    let e = trajectory_errors(&poses, &truth).unwrap();
+    let poses = &run.estimates[0];
+    let e = trajectory_errors(poses, &truth).unwrap();
     assert!(e.heading_rms_rad.to_degrees() < 0.04, "{e:?}");
 }

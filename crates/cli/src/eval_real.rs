@@ -647,8 +647,8 @@ fn check_loops(
         .collect()
 }
 
-/// One loop-closing run's loops, `name`d, against `reference` (a pose per
-/// scan, where known).
+/// One loop-closing run's loops, `name`d, against `reference`: right and
+/// wrong against its strict poses, false loops against its loose ones.
 fn loop_row(name: &str, l: &LoopClosing, reference: LoopReference<'_>) -> LoopRow {
     let scans: Vec<usize> = l.keyframes().iter().map(|k| k.scan).collect();
     let loose = LoopCheck::of(l.loops(), &scans, reference.loose);
