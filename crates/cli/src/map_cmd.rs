@@ -704,6 +704,8 @@ fn finish(mapper: &mut Mapper, poses: &mut [PoseOut]) -> Option<GraphOut> {
                     LoopSearch::PlaceRecognition => "place_recognition",
                     _ => "other",
                 },
+                weak_prior: r.weak_prior,
+                confirmed_with: r.confirmed_with,
             })
             .collect(),
         optimizations: l.optimizations(),
@@ -765,6 +767,12 @@ struct LoopOut {
     /// How the candidate was found: `local` (within the search radius) or
     /// `place_recognition` (beyond it, by the likeness of the line sets).
     search: &'static str,
+    /// The prior did not vouch for the place (place recognition, or an
+    /// uncertainty beyond the search radius): confirmed only with a loop
+    /// from independent lines (`loop_closure.independent_confirm_keyframes`).
+    weak_prior: bool,
+    /// The other loop of the confirming pair (an index into `loops`).
+    confirmed_with: Option<usize>,
 }
 
 fn draw(

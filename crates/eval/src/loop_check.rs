@@ -145,6 +145,8 @@ mod tests {
             other_place_length_m: 0.0,
             information: Matrix3::identity(),
             search: pcaline_aiding::LoopSearch::Local,
+            weak_prior: false,
+            confirmed_with: None,
             outcome,
         }
     }
