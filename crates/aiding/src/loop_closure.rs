@@ -1103,22 +1103,24 @@ impl LoopClosing {
         // place, the two loops must align local sets with no keyframe in
         // common: adjacent keyframes see nearly the same lines, and agree
         // on a wrong place as readily as on the right one.
-        let weak_prior = verified.weak_prior;
         let independent = c.independent_confirm_keyframes > 0;
+        let nodes = &self.graph.nodes;
+        let loops = &self.loops;
         let window = |p: &PendingLoop| {
-            if independent && p.weak_prior {
+            if independent && loops[p.record].weak_prior {
                 c.confirm_keyframes.max(c.independent_confirm_keyframes)
             } else {
                 c.confirm_keyframes
             }
         };
         self.pending.retain(|p| current - p.keyframe <= window(p));
-        let nodes = &self.graph.nodes;
-        let loops = &self.loops;
         let agrees = |p: &PendingLoop| {
             let earlier = &loops[p.record];
             let (kp, jp) = (earlier.keyframe, earlier.candidate);
-            if independent && (p.weak_prior || weak_prior) && current - kp <= c.submap_keyframes {
+            if independent
+                && (earlier.weak_prior || verified.weak_prior)
+                && current - kp <= c.submap_keyframes
+            {
                 return false;
             }
             // The earlier candidate's frame to this keyframe, both ways.
@@ -1132,7 +1134,7 @@ impl LoopClosing {
         let confirmed: Vec<usize> =
             self.pending.iter().filter(|p| agrees(p)).map(|p| p.record).collect();
         if c.confirm_keyframes > 0 && confirmed.is_empty() {
-            self.pending.push(PendingLoop { keyframe: current, record: index, weak_prior });
+            self.pending.push(PendingLoop { keyframe: current, record: index });
             return 0;
         }
         if let Some(&first) = confirmed.first() {
@@ -1162,7 +1164,7 @@ impl LoopClosing {
             self.loops[r].outcome = LoopOutcome::Accepted;
             added += 1;
         }
-        self.pending.push(PendingLoop { keyframe: current, record: index, weak_prior });
+        self.pending.push(PendingLoop { keyframe: current, record: index });
         added
     }
 
@@ -1277,8 +1279,6 @@ struct PendingLoop {
     keyframe: usize,
     /// Its index in the loop records.
     record: usize,
-    /// [`LoopRecord::weak_prior`].
-    weak_prior: bool,
 }
 
 /// Each line directed with its viewpoint on its left, so that the two faces
