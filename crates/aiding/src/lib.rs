@@ -66,7 +66,9 @@ pub use pose_graph::{
 pub use pose_update::{PoseUpdate, gate_distance2, iterated_update, joint_consistent};
 pub use pose_window::{MeasureAt, PoseWindow, WindowStep};
 pub use recovery::{Recovered, Recovery, recover};
-pub use source_calibration::{CalibrationConfig, MAX_TURN_RATE_RAD_S, SourceCalibration};
+pub use source_calibration::{
+    CalibrationConfig, MAX_TURN_RATE_RAD_S, STILL_STEP_M, STILL_TURN_RAD, SourceCalibration,
+};
 pub use translation::{NormalConstraint, TranslationFix, solve_translation};
 
 use pcaline_geometry::{ConfigError, Matrix3, Pose2, Vector2};

@@ -35,6 +35,20 @@ struct Motion {
     turn_rad: f64,
 }
 
+/// A source step shorter than this (and turning less than
+/// [`STILL_TURN_RAD`]) is no motion: a stopped platform, or a source that
+/// stopped updating, metres.
+pub const STILL_STEP_M: f64 = 1e-3;
+
+/// See [`STILL_STEP_M`]: 0.01°, radians.
+pub const STILL_TURN_RAD: f64 = 1.745_329_251_994_33e-4;
+
+/// Whether the source's `increment` is no motion ([`STILL_STEP_M`],
+/// [`STILL_TURN_RAD`]).
+fn is_still(increment: &Pose2) -> bool {
+    increment.x().hypot(increment.y()) < STILL_STEP_M && increment.heading().abs() < STILL_TURN_RAD
+}
+
 /// A latency beyond this is not a latency error, seconds.
 const MAX_LATENCY_S: f64 = 0.5;
 
@@ -121,6 +135,9 @@ pub struct SourceCalibration {
     /// Whether the last step's duration was usable (stamped, positive, and
     /// not turning faster than [`MAX_TURN_RATE_RAD_S`]).
     step_timed: bool,
+    /// Time since the source last moved (its steps since then all still:
+    /// [`STILL_STEP_M`]), seconds.
+    stale_s: f64,
 }
 
 /// A correction of a prior error seen as a measurement of that error: the
@@ -151,6 +168,7 @@ impl SourceCalibration {
             previous_motion: None,
             rate_change_rad_s: 0.0,
             step_timed: false,
+            stale_s: 0.0,
         }
     }
 
@@ -158,8 +176,13 @@ impl SourceCalibration {
     /// their uncertainty adds to the predicted heading and along the step.
     /// `dt_s` is the step's duration when known; a step turning faster
     /// than [`MAX_TURN_RATE_RAD_S`] over it is taken as unstamped, here and
-    /// in the [`SourceCalibration::observe`] that follows. The random walks
-    /// are added to the variances here.
+    /// in the [`SourceCalibration::observe`] that follows. A step without
+    /// motion ([`STILL_STEP_M`], [`STILL_TURN_RAD`]: a stopped platform, or
+    /// a source that stopped updating) gets no latency correction and is not
+    /// the next step's reference rate; the next step that moves is taken
+    /// over the whole time since the source last moved (a stalled source
+    /// catching up gives the turn of all those steps in one). The random
+    /// walks are added to the variances here.
     pub fn correct(
         &mut self,
         config: &CalibrationConfig,
@@ -179,10 +202,21 @@ impl SourceCalibration {
         }
         self.rate_change_rad_s = 0.0;
         match (config.latency_std_s, dt_s) {
+            (Some(_), Some(dt)) if is_still(increment) => {
+                // The source did not move: a stopped platform, or a source
+                // that stopped updating. Its step says nothing of a
+                // change of rate; the motion before it stays the reference.
+                self.latency_var += config.latency_walk_s_per_sqrt_s.powi(2) * dt;
+                self.stale_s += dt;
+            }
             (Some(_), Some(dt)) => {
                 self.latency_var += config.latency_walk_s_per_sqrt_s.powi(2) * dt;
-                let rate = inc.heading() / dt;
-                let velocity = Vector2::new(inc.x(), inc.y()) / dt;
+                // After still steps, the source's step may span them all
+                // (a stalled source catching up): its rate is
+                // taken over the whole time since it last moved.
+                let span = dt + std::mem::take(&mut self.stale_s);
+                let rate = inc.heading() / span;
+                let velocity = Vector2::new(inc.x(), inc.y()) / span;
                 let tau = self.latency_s;
                 let mut t = Vector2::new(inc.x(), inc.y());
                 let mut change = 0.0;
@@ -215,7 +249,10 @@ impl SourceCalibration {
                     + 2.0 * self.bias_latency_cov * bias_dt * change
                     + self.latency_var * change * change;
             }
-            _ => self.previous_motion = None,
+            _ => {
+                self.previous_motion = None;
+                self.stale_s = 0.0;
+            }
         }
         let len = inc.x().hypot(inc.y());
         if config.speed_scale_std.is_some() {
@@ -441,6 +478,40 @@ mod tests {
         let _ = cal.correct(&config, &steady, Some(1.0));
         let (inc, _, _) = cal.correct(&config, &glitch, Some(1.0));
         assert!((inc.heading() - glitch.heading()).abs() > 1e-3, "{inc:?}");
+    }
+
+    /// MIT CSAIL's raw odometry stays the same for four scans during a
+    /// turn, then gives the whole turn in one step. The step spans the
+    /// stalled ones: its rate is the turn's, not five times it, so the
+    /// latency takes nothing off it (taking `latency * change` off it
+    /// turned the estimate 31° instead of 85° at scan 1584), nor off the
+    /// next step.
+    #[test]
+    fn a_stalled_source_catching_up_is_not_taken_for_a_change_of_rate() {
+        let config = CalibrationConfig::standard();
+        let (rate, dt) = (1.0, 0.2);
+        let turning = Pose2::new(0.0, 0.0, rate * dt);
+        let mut cal = SourceCalibration::new(&config);
+        cal.latency_s = 0.1;
+        for _ in 0..3 {
+            let _ = cal.correct(&config, &turning, Some(dt));
+        }
+        for _ in 0..4 {
+            let (inc, _, _) = cal.correct(&config, &Pose2::identity(), Some(dt));
+            assert_eq!(inc.heading(), 0.0, "a still step is left as it is");
+        }
+        let catch_up = Pose2::new(0.0, 0.0, 5.0 * rate * dt);
+        let (inc, _, _) = cal.correct(&config, &catch_up, Some(dt));
+        assert!((inc.heading() - catch_up.heading()).abs() < 1e-12, "{inc:?}");
+        let (inc, _, _) = cal.correct(&config, &turning, Some(dt));
+        assert!((inc.heading() - turning.heading()).abs() < 1e-12, "{inc:?}");
+        // A real change of rate after the still steps is still corrected.
+        for _ in 0..2 {
+            let _ = cal.correct(&config, &Pose2::identity(), Some(dt));
+        }
+        let faster = Pose2::new(0.0, 0.0, 3.0 * 3.0 * rate * dt);
+        let (inc, _, _) = cal.correct(&config, &faster, Some(dt));
+        assert!((inc.heading() - (faster.heading() - 0.1 * (3.0 - 1.0))).abs() < 1e-9, "{inc:?}");
     }
 
     /// Steps along x that the source makes 3% too long, and a position
