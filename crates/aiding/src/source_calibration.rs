@@ -41,7 +41,7 @@ struct Motion {
 pub const STILL_STEP_M: f64 = 1e-3;
 
 /// See [`STILL_STEP_M`]: 0.01°, radians.
-pub const STILL_TURN_RAD: f64 = 1.745_329_251_994_33e-4;
+pub const STILL_TURN_RAD: f64 = std::f64::consts::PI / 18_000.0;
 
 /// Whether the source's `increment` is no motion ([`STILL_STEP_M`],
 /// [`STILL_TURN_RAD`]).
