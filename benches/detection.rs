@@ -6,7 +6,7 @@
 #![allow(clippy::print_stderr)] // the loud report of a missing dataset
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use pcaline::geometry::{BearingTable, ScanPoints};
+use pcaline::geometry::{BearingTable, ScanPoints, SensorProfile};
 use pcaline::segmentation::{
     BreakRule, NoiseEstimation, estimate_range_noise, level1_clusters, split_at_farthest,
 };
@@ -80,10 +80,10 @@ fn detection(c: &mut Criterion) {
     }
 
     let mut group = c.benchmark_group("detect_1081_beams");
-    let estimated = Config::default().with_noise_estimation(NoiseEstimation::standard());
+    let datasheet = Config::datasheet(SensorProfile::Utm30lxEw);
     for (name, scan) in &scans {
         for (preset, config) in
-            [("default", Config::default()), ("estimated", estimated), ("paper", Config::paper())]
+            [("default", Config::default()), ("datasheet", datasheet), ("paper", Config::paper())]
         {
             let mut det = LineDetector::new(config).unwrap();
             group.bench_with_input(BenchmarkId::new(preset, name), scan, |b, s| {

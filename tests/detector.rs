@@ -4,7 +4,7 @@
 mod support;
 
 use pcaline::segmentation::{DerivativeSign, Level2Rule};
-use pcaline::{Config, LineDetector, Point2, Scan, geometry::wrap_angle};
+use pcaline::{Config, LineDetector, Point2, Scan, geometry::SensorProfile, geometry::wrap_angle};
 use proptest::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 use support::*;
@@ -332,12 +332,12 @@ proptest! {
     }
 }
 
-/// The adaptive detector says which noise it used: the profile's (widened by
+/// The default detector says which noise it used: the profile's (widened by
 /// the range grid) when a scan has too few triples to estimate from, the
 /// scan's own when a clearly noisier sensor took it.
 #[test]
-fn the_adaptive_detector_reports_the_noise_it_used() {
-    let mut det = LineDetector::new(Config::adaptive()).unwrap();
+fn the_default_detector_reports_the_noise_it_used() {
+    let mut det = LineDetector::new(Config::default()).unwrap();
     // 12 beams on a wall: too few triples (30 a band) to estimate.
     let few = Scan::new(-0.05, 0.25f32.to_radians(), 0.1, 30.0, vec![2.0; 12]);
     let d = det.detect(&few);
@@ -351,9 +351,12 @@ fn the_adaptive_detector_reports_the_noise_it_used() {
     let sigma = d.noise.unwrap().near_sigma_m;
     assert!((sigma / 0.04 - 1.0).abs() < 0.25, "{sigma}");
     assert!(d.noise_estimate.unwrap().samples[0] >= 30);
-    // The default is told the datasheet and estimates nothing.
-    let mut default = LineDetector::new(Config::default()).unwrap();
-    let d = default.detect(&noisy);
+    // The adaptive detector estimates as the default does.
+    let mut adaptive = LineDetector::new(Config::adaptive()).unwrap();
+    assert_eq!(adaptive.detect(&noisy).noise.unwrap().near_sigma_m, sigma);
+    // The datasheet detector is told the datasheet and estimates nothing.
+    let mut datasheet = LineDetector::new(Config::datasheet(SensorProfile::Utm30lxEw)).unwrap();
+    let d = datasheet.detect(&noisy);
     assert!(d.noise_estimate.is_none());
     assert_eq!(d.noise, Some(pcaline::RangeNoise::utm30lx()));
 }

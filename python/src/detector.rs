@@ -26,7 +26,7 @@ pub struct PyLineDetector {
 #[pymethods]
 impl PyLineDetector {
     /// A detector. `config` is a preset (`"default"`, `"paper"`,
-    /// `"split-and-merge"`, `"told-sigma"`, `"estimated"`, `"adaptive"`) or
+    /// `"split-and-merge"`, `"told-sigma"`, `"datasheet"`, `"adaptive"`) or
     /// the path of a TOML or JSON configuration file; `overrides` are its
     /// `detector` fields, as `fitting__eth=30` or `fitting={"eth": 30}`.
     /// Raises `ValueError` naming the field for a bad configuration.

@@ -25,7 +25,6 @@ use anyhow::Result;
 use pcaline::aiding::{AidingConfig, AidingMode, LoopClosureConfig};
 use pcaline::geometry::SensorProfile;
 use pcaline::mapping::MapConfig;
-use pcaline::segmentation::NoiseEstimation;
 use pcaline::{Config, ConfigError, Pose2, RangeNoise};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -37,14 +36,16 @@ use toml::Value;
 pub enum Preset {
     /// The paper exactly: its detector, map and heading aiding.
     Paper,
-    /// The default detector (noise-aware rules at the UTM-30LX-EW datasheet).
+    /// The default detector (noise-aware rules, the range noise estimated
+    /// from each scan with the UTM-30LX-EW datasheet as its nominal).
     Default,
     /// The split-and-merge baseline.
     SplitAndMerge,
     /// The default told the range noise (constant).
     ToldSigma,
-    /// The default estimating the noise from each scan.
-    Estimated,
+    /// The default's rules at the UTM-30LX-EW datasheet noise, not
+    /// estimated (the default before 2026-12-05).
+    Datasheet,
     /// Estimation and curved-surface chords refused.
     Adaptive,
 }
@@ -56,7 +57,7 @@ impl Preset {
         Preset::Default,
         Preset::SplitAndMerge,
         Preset::ToldSigma,
-        Preset::Estimated,
+        Preset::Datasheet,
         Preset::Adaptive,
     ];
 
@@ -68,13 +69,18 @@ impl Preset {
             Preset::Default => "default",
             Preset::SplitAndMerge => "split-and-merge",
             Preset::ToldSigma => "told-sigma",
-            Preset::Estimated => "estimated",
+            Preset::Datasheet => "datasheet",
             Preset::Adaptive => "adaptive",
         }
     }
 
     /// The preset named `name`, or `None`.
     pub fn from_name(name: &str) -> Option<Self> {
+        // `estimated` named the default estimating the noise before the
+        // default did (2026-12-05): files that name it keep working.
+        if name == "estimated" {
+            return Some(Preset::Default);
+        }
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
 
@@ -94,9 +100,7 @@ impl Preset {
             Preset::ToldSigma => {
                 (Config::noise_aware(RangeNoise::constant(sigma_m.max(1e-3))), map)
             }
-            Preset::Estimated => {
-                (Config::default().with_noise_estimation(NoiseEstimation::standard()), map)
-            }
+            Preset::Datasheet => (Config::datasheet(SensorProfile::Utm30lxEw), map),
             Preset::Adaptive => (Config::adaptive(), map),
         }
     }

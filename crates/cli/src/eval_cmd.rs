@@ -46,7 +46,7 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 60, value_parser = crate::count_at_least_one)]
     scans: usize,
     /// Configurations to evaluate, side by side (repeat): a preset (paper,
-    /// default, split-and-merge, told-sigma, estimated, adaptive) or a TOML/JSON file
+    /// default, split-and-merge, told-sigma, datasheet, adaptive) or a TOML/JSON file
     /// naming a preset and overriding fields (see --show-config). Default:
     /// all presets.
     #[arg(long = "config")]
@@ -276,10 +276,11 @@ pub fn run(args: &EvalArgs, quiet: bool) -> Result<()> {
     }
     if !args.no_localization {
         // The scenes as shipped (their own sensor noise, the UTM-30LX-EW's):
-        // `told-sigma` and `estimated` would be `default` again.
+        // `told-sigma` and `datasheet` would be `default` again (the
+        // default's estimate is the datasheet's noise there).
         let configs: Vec<NamedConfig> = specs
             .iter()
-            .filter(|s| !matches!(s.as_str(), "told-sigma" | "estimated"))
+            .filter(|s| !matches!(s.as_str(), "told-sigma" | "datasheet" | "estimated"))
             .map(|s| resolve(s, 0.01))
             .collect::<Result<_>>()?;
         report.localization = localization_rows(&scenes, args.seeds, &configs, quiet)?;

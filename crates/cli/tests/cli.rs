@@ -665,10 +665,19 @@ fn detect_takes_a_sensor_and_says_which_noise_it_used() {
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         json_lines(&out.stdout).remove(0)
     };
+    // The default estimates the noise: these centimetre ranges are the
+    // datasheet's 1 cm (a 1 cm grid adds 4%, within the nominal's 1.5x).
     let default = detect(&[]);
     assert_eq!(default["noise"]["near_sigma_m"], 0.01);
     assert_eq!(default["noise"]["far_sigma_m"], 0.03);
-    assert_eq!(default["noise"]["estimated"], false);
+    assert_eq!(default["noise"]["estimated"], true);
+    assert_eq!(default["noise"]["range_step_m"], 0.01);
+    let datasheet = detect(&["--config", "datasheet"]);
+    assert_eq!(datasheet["noise"]["estimated"], false);
+    assert_eq!(datasheet["lines"], default["lines"]);
+    // `estimated`, the name of the estimating preset before it became the
+    // default, is read as the default.
+    assert_eq!(detect(&["--config", "estimated"]), default);
     let line = &default["lines"][0];
     for key in ["residual_ratio", "runs_z", "bow_m"] {
         assert!(line[key].as_f64().unwrap().is_finite(), "{key}: {line}");

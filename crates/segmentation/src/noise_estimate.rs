@@ -30,7 +30,14 @@
 //! carry a quantisation error of standard deviation `step / sqrt(12)` that
 //! the triples cannot see when a wall's ranges round alike. The grid step is
 //! found from the ranges themselves ([`detect_range_step`]) and the sigma is
-//! kept at or above `hypot(nominal, step / sqrt(12))`.
+//! kept at or above `hypot(nominal, step / sqrt(12))`, judged as an estimate
+//! is: within `consistent_scale` of the nominal it is the nominal (a 1 cm
+//! grid on a 1 cm sensor), beyond it ramps in.
+//!
+//! A triple whose residual lies beyond 3 standard deviations of the largest
+//! sigma the estimate may give is left out: its middle beam is on another
+//! surface (a see-through railing, a mixed pixel, an edge), and a scan with
+//! many such triples is not a noisier sensor.
 
 use pcaline_geometry::{ConfigError, RangeNoise, ScanPoints};
 
@@ -202,11 +209,17 @@ pub struct NoiseEstimate {
 /// points.fill_from(&wall(&|i| if i % 2 == 0 { 0.02 } else { -0.02 }), &mut BearingTable::default());
 /// let found = estimate_range_noise(&points, &nominal, &e, 0.0, &mut scratch);
 /// assert_eq!(found.noise.sigma_at(2.0), 0.01);
-/// // Ranges in 5 cm steps: never below hypot(1 cm, 5 cm / sqrt(12)).
+/// // Ranges in 5 cm steps: hypot(1 cm, 5 cm / sqrt(12)) = 17.5 mm is
+/// // more than 1.5 cm, so the quantisation ramps in: never below
+/// // 1 cm + 2 (17.5 mm - 1.5 cm) = 15 mm.
 /// let still = Scan::new(-0.4, inc, 0.1, 30.0, vec![2.0; 200]);
 /// points.fill_from(&still, &mut BearingTable::default());
 /// let found = estimate_range_noise(&points, &nominal, &e, 0.05, &mut scratch);
-/// assert!((found.noise.sigma_at(2.0) - 0.01f64.hypot(0.05 / 12f64.sqrt())).abs() < 1e-9);
+/// let total = 0.01f64.hypot(0.05 / 12f64.sqrt());
+/// assert!((found.noise.sigma_at(2.0) - (0.01 + 2.0 * (total - 0.015))).abs() < 1e-9);
+/// // A centimetre grid on a 1 cm sensor: 10.4 mm, the nominal.
+/// let found = estimate_range_noise(&points, &nominal, &e, 0.01, &mut scratch);
+/// assert_eq!(found.noise.sigma_at(2.0), 0.01);
 /// ```
 pub fn estimate_range_noise(
     points: &ScanPoints,
@@ -225,7 +238,10 @@ pub fn estimate_range_noise(
     });
     // Consecutive beams first.
     let (near, far) = (&mut scratch.near, &mut scratch.far);
-    collect_triples(points, nominal.far_from_m, 1, near, far);
+    let caps = [nominal.near_sigma_m, nominal.far_sigma_m].map(|band| {
+        OUTLIER_SIGMAS * 1.5f64.sqrt() * (band * estimation.max_scale).max(estimation.floor_m)
+    });
+    collect_triples(points, nominal.far_from_m, 1, caps, near, far);
     let mut samples = [near.len(), far.len()];
     let mut estimates = [near, far].map(|r| band_sigma(r, estimation.min_samples));
     // Every other beam replaces them in a band where it gives a clearly
@@ -235,7 +251,7 @@ pub fn estimate_range_noise(
     // sigma could move.
     if estimates.iter().zip(steady).any(|(e, s)| e.is_some_and(|e| e > s)) {
         let (near, far) = (&mut scratch.near, &mut scratch.far);
-        collect_triples(points, nominal.far_from_m, 2, near, far);
+        collect_triples(points, nominal.far_from_m, 2, caps, near, far);
         for (k, residuals) in [near, far].into_iter().enumerate() {
             if let (Some(consecutive), Some(e)) =
                 (estimates[k], band_sigma(residuals, estimation.min_samples))
@@ -266,10 +282,25 @@ pub fn estimate_range_noise(
 
 /// A band's nominal sigma with the range grid's quantisation added, and the
 /// lowest sigma an estimate may set (`min_scale` of the nominal, with the
-/// quantisation).
+/// quantisation). The quantisation is judged as an estimate is: a total
+/// within `consistent_scale` of the sigma is the sigma (a 1 cm grid adds 4%
+/// to a 1 cm nominal), and above it the total ramps in, reached at
+/// `2 consistent_scale - 1` times the sigma.
 fn band_floor(band: f64, estimation: &NoiseEstimation, quantisation: f64) -> (f64, f64) {
-    (band.hypot(quantisation), (band * estimation.min_scale).hypot(quantisation))
+    let c = estimation.consistent_scale.max(1.0);
+    let with_grid = |sigma: f64| {
+        let total = sigma.hypot(quantisation);
+        if total <= c * sigma { sigma } else { total.min(sigma + 2.0 * (total - c * sigma)) }
+    };
+    (with_grid(band), with_grid(band * estimation.min_scale))
 }
+
+/// A triple's residual beyond this many standard deviations of the largest
+/// sigma the estimate may give ([`NoiseEstimation::max_scale`] times the
+/// band's nominal) is not range noise: the middle beam lies on another
+/// surface (a see-through railing whose beams alternate between 3 m and
+/// 12 m, a mixed pixel, an edge).
+const OUTLIER_SIGMAS: f64 = 3.0;
 
 /// Consecutive beams' sigma over every other beam's beyond which a band is
 /// taken to be interlaced. For white noise the two agree within about 10%
@@ -285,6 +316,7 @@ fn collect_triples(
     points: &ScanPoints,
     far_from_m: f64,
     gap: usize,
+    caps: [f64; 2],
     near: &mut Vec<u64>,
     far: &mut Vec<u64>,
 ) {
@@ -315,9 +347,10 @@ fn collect_triples(
                 (last_half, cos_half) = (half, cosine(half));
             }
             let residual = (r - 2.0 * a * b * cos_half / (a + b)).abs();
-            if residual.is_finite() {
-                let bits = residual.to_bits();
-                if r < far_from_m { near.push(bits) } else { far.push(bits) }
+            let (band, cap) =
+                if r < far_from_m { (&mut *near, caps[0]) } else { (&mut *far, caps[1]) };
+            if residual <= cap {
+                band.push(residual.to_bits());
             }
         }
         i += stride;
@@ -589,8 +622,42 @@ mod tests {
         assert!((n.noise.near_sigma_m / 0.01 - 1.0).abs() < 0.25, "{n:?}");
         // Consecutive beams alone would see the sawtooth.
         let (mut near, mut far) = (Vec::new(), Vec::new());
-        collect_triples(&points, 10.0, 1, &mut near, &mut far);
+        collect_triples(&points, 10.0, 1, [1.0; 2], &mut near, &mut far);
         let consecutive = band_sigma(&mut near, 30).unwrap();
         assert!(consecutive > 0.02, "{consecutive}");
+    }
+
+    /// A see-through railing (MIT CSAIL scan 1450): every third beam passes
+    /// through to a wall 9 m behind, so two triples in three straddle the
+    /// two surfaces. Their metre-sized residuals are not noise: the
+    /// estimate stays the nominal. Without the cap the smaller half of the
+    /// residuals holds straddling triples and the band is clamped at 4x.
+    #[test]
+    fn a_see_through_railing_is_not_taken_for_noise() {
+        let inc = 0.5f64.to_radians();
+        let mut rng = StdRng::seed_from_u64(5);
+        let noise = rand_distr::Normal::new(0.0, 0.01).unwrap();
+        let ranges: Vec<f32> = (0..361)
+            .map(|i| {
+                let b = -90f64.to_radians() + i as f64 * inc;
+                let d = if i % 3 == 2 { 12.0 } else { 3.0 };
+                let r = d / b.cos().max(0.2) + rand_distr::Distribution::sample(&noise, &mut rng);
+                r as f32
+            })
+            .collect();
+        let mut points = ScanPoints::default();
+        points.fill_from(
+            &Scan::new(-90f32.to_radians(), inc as f32, 0.1, 80.0, ranges),
+            &mut BearingTable::default(),
+        );
+        let nominal = RangeNoise::constant(0.01);
+        let mut scratch = NoiseScratch::default();
+        let e = NoiseEstimation::standard();
+        let n = estimate_range_noise(&points, &nominal, &e, 0.0, &mut scratch);
+        assert_eq!(n.noise.near_sigma_m, 0.01, "{n:?}");
+        // Uncapped, the straddling triples are more than half.
+        let (mut near, mut far) = (Vec::new(), Vec::new());
+        collect_triples(&points, 100.0, 1, [f64::INFINITY; 2], &mut near, &mut far);
+        assert!(band_sigma(&mut near, 30).unwrap() > 0.04);
     }
 }
