@@ -365,13 +365,18 @@ fn cosine(angle: f64) -> f64 {
     angle.cos()
 }
 
+/// The coarsest grid [`detect_range_step`] reports, metres: LIDARs round
+/// their ranges to 1 mm, 1 cm or 5 cm.
+const MAX_GRID_STEP_M: f64 = 0.1;
+
 /// Fewest valid ranges [`detect_range_step`] decides on.
 const MIN_GRID_RANGES: usize = 20;
 
 /// The step of the grid the positive finite `ranges` are rounded to, metres,
 /// found to 0.1 mm; 0 when they are continuous, the step is under 0.5 mm
-/// (negligible beside any LIDAR's noise), or fewer than 20 of the ranges
-/// examined are valid.
+/// (negligible beside any LIDAR's noise), the step is over 10 cm (ranges in
+/// whole metres are data, not a LIDAR's rounding), or fewer than 20 of the
+/// ranges examined are valid.
 ///
 /// The smallest non-zero difference of consecutive ranges is a multiple of
 /// the step, nearly always the step itself; it is taken over up to 256
@@ -388,6 +393,8 @@ const MIN_GRID_RANGES: usize = 20;
 /// assert!((detect_range_step(&five) - 0.05).abs() < 1e-9);
 /// let smooth: Vec<f32> = (0..100).map(|i| 2.0 + 0.0123 * (i as f32).sin()).collect();
 /// assert_eq!(detect_range_step(&smooth), 0.0);
+/// let metres: Vec<f32> = (1..30).map(|i| i as f32).collect();
+/// assert_eq!(detect_range_step(&metres), 0.0);
 /// ```
 pub fn detect_range_step(ranges: &[f32]) -> f64 {
     let valid = |r: f32| r.is_finite() && r > 0.0;
@@ -433,7 +440,10 @@ pub fn detect_range_step(ranges: &[f32]) -> f64 {
             return 0.0;
         }
         if on * 20 >= seen * 19 {
-            return step;
+            // Ranges on a coarser grid (whole metres) are not a LIDAR's
+            // rounding: taken as a grid, they would widen every threshold
+            // beyond any noise the estimate may report.
+            return if step <= MAX_GRID_STEP_M { step } else { 0.0 };
         }
     }
     0.0
