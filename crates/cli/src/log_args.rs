@@ -56,7 +56,8 @@ pub struct LogArgs {
     #[arg(long, default_value_t = 80.0, allow_negative_numbers = true)]
     pub max_range: f64,
     /// The sensor: utm30lx-ew, sick-lms, urg-04lx or rplidar. The detector's
-    /// thresholds use its datasheet noise. Absent: the configuration file's
+    /// thresholds use its datasheet noise (the nominal the default's
+    /// estimate starts from). Absent: the configuration file's
     /// `sensor`, else the sensor the log names (CARMEN ROBOTLASER1), else the
     /// configuration's own (the UTM-30LX-EW for the presets).
     #[arg(long, value_parser = parse_sensor)]
