@@ -269,8 +269,7 @@ pub fn estimate_range_noise(
         let hi = (*band * estimation.max_scale).max(base);
         *band = match estimate {
             Some(estimate) if estimate > base => {
-                let ramp = base + 2.0 * (estimate - estimation.consistent_scale * base);
-                estimate.min(ramp).clamp(base, hi)
+                judged(estimate, base, estimation.consistent_scale).clamp(base, hi)
             }
             Some(estimate) => estimate.max(lo),
             None => base,
@@ -287,12 +286,18 @@ pub fn estimate_range_noise(
 /// to a 1 cm nominal), and above it the total ramps in, reached at
 /// `2 consistent_scale - 1` times the sigma.
 fn band_floor(band: f64, estimation: &NoiseEstimation, quantisation: f64) -> (f64, f64) {
-    let c = estimation.consistent_scale.max(1.0);
-    let with_grid = |sigma: f64| {
-        let total = sigma.hypot(quantisation);
-        if total <= c * sigma { sigma } else { total.min(sigma + 2.0 * (total - c * sigma)) }
-    };
+    let with_grid =
+        |sigma: f64| judged(sigma.hypot(quantisation), sigma, estimation.consistent_scale);
     (with_grid(band), with_grid(band * estimation.min_scale))
+}
+
+/// A sigma found (`value`, an estimate or a quantisation-widened nominal)
+/// judged against `sigma`: within `consistent_scale` of it, `sigma`; above,
+/// ramping from `sigma` to `value`, reached at `2 consistent_scale - 1`
+/// times `sigma` (module docs).
+fn judged(value: f64, sigma: f64, consistent_scale: f64) -> f64 {
+    let c = consistent_scale.max(1.0);
+    if value <= c * sigma { sigma } else { value.min(sigma + 2.0 * (value - c * sigma)) }
 }
 
 /// A triple's residual beyond this many standard deviations of the largest
