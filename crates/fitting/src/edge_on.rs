@@ -17,7 +17,7 @@
 
 use crate::Moments;
 use crate::kink::RunSums;
-use pcaline_geometry::{Point2, Vector2};
+use pcaline_geometry::{ConfigError, Point2, Vector2};
 
 /// Beams meeting the line at less than this cosine (within 6° of it) make
 /// the test unusable: where such a beam meets the line is not known.
@@ -58,6 +58,26 @@ impl EdgeOnEnds {
     /// neither by more than 0.1 point.
     pub const fn standard() -> Self {
         EdgeOnEnds { min_points: 5, min_stall_z: 3.0, min_chi2: 4.0 }
+    }
+
+    /// Checks every value: `min_points` at least 3, `min_stall_z` and
+    /// `min_chi2` finite and not negative. Errors name `prefix.min_points`
+    /// and so on (`fitting.edge_on_ends` in a [`crate::FitConfig`]).
+    ///
+    /// ```
+    /// use pcaline_fitting::EdgeOnEnds;
+    /// let e = EdgeOnEnds::new(2, 3.0, 4.0).validate("fitting.edge_on_ends").unwrap_err();
+    /// assert!(e.to_string().contains("`fitting.edge_on_ends.min_points`"));
+    /// assert!(EdgeOnEnds::standard().validate("x").is_ok());
+    /// ```
+    pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
+        let n = self.min_points as f64;
+        ConfigError::check_field(self.min_points >= 3, prefix, "min_points", n, "must be >= 3")?;
+        for (name, v) in [("min_stall_z", self.min_stall_z), ("min_chi2", self.min_chi2)] {
+            let ok = v >= 0.0 && v.is_finite();
+            ConfigError::check_field(ok, prefix, name, v, "must be finite and >= 0")?;
+        }
+        Ok(())
     }
 }
 
@@ -147,16 +167,60 @@ pub fn edge_on_ends(
     }
     let d = normal.dot(&c.coords);
     let total = RunSums::about_mean(moments);
-    let one_line = total.residual_sum();
-    let (z2, sigma2) = (test.min_stall_z * test.min_stall_z, sigma_m * sigma_m);
-    // One end, walked inward.
-    let best_run = |indices: &mut dyn Iterator<Item = usize>| {
-        let (mut run, mut trend) = (RunSums::default(), Trend::default());
+    let walk = EndWalk {
+        points,
+        c: c.coords,
+        u,
+        normal,
+        d,
+        total,
+        one_line: total.residual_sum(),
+        z2: test.min_stall_z * test.min_stall_z,
+        sigma2: sigma_m * sigma_m,
+        test,
+    };
+    let start = walk.best_run(|m| m);
+    let end = walk.best_run(|m| n - 1 - m);
+    if start + end + test.min_points > n {
+        return (0, 0);
+    }
+    (start, end)
+}
+
+/// One line's end walked inward by [`edge_on_ends`].
+struct EndWalk<'a> {
+    points: &'a [Point2<f64>],
+    /// The centroid, the line's direction and its normal away from the
+    /// sensor, and its distance from the sensor.
+    c: Vector2<f64>,
+    u: Vector2<f64>,
+    normal: Vector2<f64>,
+    d: f64,
+    /// The sums of all the points about the centroid, and their residual
+    /// sum about one line.
+    total: RunSums,
+    one_line: f64,
+    /// `min_stall_z` and `sigma_m`, squared.
+    z2: f64,
+    sigma2: f64,
+    test: &'a EdgeOnEnds,
+}
+
+impl EndWalk<'_> {
+    /// How many points of the end run whose `m`-th point is `index(m)` (an
+    /// end, walked inward) to cut: the stalled run whose own line lowers the
+    /// residual sum most ([`edge_on_ends`]), or 0.
+    fn best_run(&self, index: impl Fn(usize) -> usize) -> usize {
+        let (points, u, test) = (self.points, self.u, self.test);
+        let mut trend = Trend::default();
+        // The run's sums about the centroid, brought up to date only when
+        // a stalled run is weighed (most ends never stall).
+        let (mut run, mut run_len) = (RunSums::default(), 0);
         let mut best: Option<(f64, usize)> = None;
         let mut var_along = 0.0;
-        for (m, i) in indices.take(n / 3).enumerate() {
-            let p = points[i].coords;
-            let n_p = normal.dot(&p);
+        for m in 0..points.len() / 3 {
+            let p = points[index(m)].coords;
+            let n_p = self.normal.dot(&p);
             if n_p * n_p <= MIN_BEAM_COSINE * MIN_BEAM_COSINE * p.norm_squared() {
                 return 0;
             }
@@ -164,13 +228,12 @@ pub fn edge_on_ends(
                 // The range noise along the line, at this end: sigma times
                 // the sine of the incidence (floored at a tenth of sigma).
                 let sine2 = u.dot(&p).powi(2) / p.norm_squared();
-                var_along = sigma2 * sine2.max(0.01);
+                var_along = self.sigma2 * sine2.max(0.01);
             }
             // Where the beam through p meets the line (p d / (n . p)), and
             // where the return lies, both along the line.
-            let on_beam = d * u.dot(&p) / n_p;
-            let v = p - c.coords;
-            run.add(v.x, v.y);
+            let on_beam = self.d * u.dot(&p) / n_p;
+            let v = p - self.c;
             trend.add(on_beam, u.dot(&v));
             if m + 1 < test.min_points {
                 continue;
@@ -181,27 +244,27 @@ pub fn edge_on_ends(
             if slope >= 0.5 {
                 // A run well above one half has reached the wall: a longer
                 // one, holding more of it, will not stall.
-                if (slope - 0.5).powi(2) * spread > z2 * var_along {
+                if (slope - 0.5).powi(2) * spread > self.z2 * var_along {
                     break;
                 }
                 continue;
             }
-            if (1.0 - slope).powi(2) * spread <= z2 * var_along {
+            if (1.0 - slope).powi(2) * spread <= self.z2 * var_along {
                 continue;
             }
-            let drop = (one_line - run.residual_sum() - total.minus(&run).residual_sum()) / sigma2;
+            for k in run_len..=m {
+                let w = points[index(k)].coords - self.c;
+                run.add(w.x, w.y);
+            }
+            run_len = m + 1;
+            let drop = (self.one_line - run.residual_sum() - self.total.minus(&run).residual_sum())
+                / self.sigma2;
             if drop > test.min_chi2 && best.is_none_or(|b| drop > b.0) {
                 best = Some((drop, m + 1));
             }
         }
         best.map_or(0, |b| b.1)
-    };
-    let start = best_run(&mut (0..n));
-    let end = best_run(&mut (0..n).rev());
-    if start + end + test.min_points > n {
-        return (0, 0);
     }
-    (start, end)
 }
 
 #[cfg(test)]

@@ -231,14 +231,7 @@ impl FitConfig {
             ConfigError::positive("fitting.kink_test.min_chi2", t.min_chi2)?;
         }
         if let Some(t) = self.edge_on_ends {
-            ConfigError::check(
-                t.min_points >= 3,
-                "fitting.edge_on_ends.min_points",
-                t.min_points as f64,
-                "must be >= 3",
-            )?;
-            ConfigError::non_negative("fitting.edge_on_ends.min_stall_z", t.min_stall_z)?;
-            ConfigError::non_negative("fitting.edge_on_ends.min_chi2", t.min_chi2)?;
+            t.validate("fitting.edge_on_ends")?;
         }
         if let Some(t) = self.straightness_test {
             ConfigError::non_negative(
