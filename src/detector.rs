@@ -33,6 +33,12 @@ pub struct Detection<'a> {
     pub sub_clusters: &'a [Range<usize>],
 }
 
+/// Whether the estimate `found` raised either range band's sigma above the
+/// `nominal` model's: a noisy scan ([`crate::NoisyScanTests`]).
+fn is_raised(found: &RangeNoise, nominal: &RangeNoise) -> bool {
+    found.near_sigma_m > nominal.near_sigma_m || found.far_sigma_m > nominal.far_sigma_m
+}
+
 impl Detection<'_> {
     /// Level-2 break-points: the first point of every sub-cluster that does not
     /// begin a level-1 cluster.
@@ -112,6 +118,11 @@ impl LineDetector {
                 step,
                 &mut self.noise_scratch,
             );
+            if let Some(tests) = self.config.noisy_scan_tests
+                && is_raised(&found.noise, &nominal)
+            {
+                config.fitting = tests.added_to(config.fitting);
+            }
             config = config.with_noise(found.noise);
             self.noise_estimate = Some(found);
         }

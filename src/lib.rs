@@ -29,7 +29,7 @@ mod config;
 mod detector;
 mod mapper;
 
-pub use config::Config;
+pub use config::{Config, NoisyScanTests};
 pub use detector::{Detection, LineDetector};
 pub use mapper::{Mapper, MapperConfig, MapperStep};
 pub use pcaline_fitting::DetectedLine;

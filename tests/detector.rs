@@ -360,3 +360,36 @@ fn the_default_detector_reports_the_noise_it_used() {
     assert!(d.noise_estimate.is_none());
     assert_eq!(d.noise, Some(pcaline::RangeNoise::utm30lx()));
 }
+
+#[test]
+fn the_default_cuts_edge_on_ends_on_noisy_scans_only() {
+    // A room with a 10 cm and a 40 cm thick wall whose end face the sensor
+    // sees nearly edge-on, beside the wall's long face.
+    let room_with = |wall: Vec<_>| [rectangle(-5.0, -3.0, 5.0, 4.5), wall].concat();
+    let scenes =
+        [room_with(rectangle(-3.0, 1.4, -0.5, 1.5)), room_with(rectangle(-4.0, 1.0, -1.0, 1.4))];
+    let lines = |config: &Config, scan: &Scan| {
+        let mut det = LineDetector::new(*config).unwrap();
+        det.detect(scan).lines.iter().map(|l| (l.first_point, l.last_point)).collect::<Vec<_>>()
+    };
+    let default = Config::default();
+    let mut never = default;
+    never.noisy_scan_tests = None;
+    let mut always = never;
+    always.fitting.edge_on_ends = Some(pcaline::fitting::EdgeOnEnds::standard());
+    let datasheet = Config::datasheet(SensorProfile::Utm30lxEw);
+    let (mut cut_at_10mm, mut cut_at_30mm) = (false, false);
+    for (walls, seed) in scenes.iter().flat_map(|w| (0..8).map(move |s| (w, s))) {
+        // At the datasheet's noise the default is the datasheet detector,
+        // where a cut on every scan would change a line.
+        let scan = utm_scan(walls, 0.01, seed);
+        assert_eq!(lines(&default, &scan), lines(&datasheet, &scan), "seed {seed}");
+        cut_at_10mm |= lines(&always, &scan) != lines(&never, &scan);
+        // At 30 mm the estimate is raised, and the default cuts as a
+        // detector that cuts on every scan.
+        let scan = utm_scan(walls, 0.03, seed);
+        assert_eq!(lines(&default, &scan), lines(&always, &scan), "seed {seed}");
+        cut_at_30mm |= lines(&default, &scan) != lines(&never, &scan);
+    }
+    assert!(cut_at_10mm && cut_at_30mm, "the cut changed no line: {cut_at_10mm} {cut_at_30mm}");
+}

@@ -391,7 +391,7 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 21] = [
+    const OPTIONAL: [&str; 23] = [
         "map.lifecycle",
         "aiding.estimator.window",
         "aiding.estimator.recovery",
@@ -408,6 +408,8 @@ fn optional_field(path: &str) -> bool {
         "detector.fitting.straightness_test",
         "detector.fitting.kink_test",
         "detector.fitting.edge_on_ends",
+        "detector.noisy_scan_tests",
+        "detector.noisy_scan_tests.edge_on_ends",
         "map.max_offset_m",
         "map.max_new_alpha_std_rad",
         "map.merge_gate",
@@ -609,7 +611,21 @@ mod tests {
         let path =
             write("off.toml", "preset = \"default\"\n[detector]\nnoise_estimation = false\n");
         let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
-        assert_eq!(c.detector, Config::noise_aware(RangeNoise::utm30lx()));
+        let mut expected = Config::noise_aware(RangeNoise::utm30lx());
+        expected.noisy_scan_tests = Config::default().noisy_scan_tests;
+        assert_eq!(c.detector, expected);
+        let path =
+            write("quiet.toml", "preset = \"default\"\n[detector]\nnoisy_scan_tests = false\n");
+        let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
+        assert_eq!(c.detector.noisy_scan_tests, None);
+        assert_eq!(c.detector.noise_estimation, Config::default().noise_estimation);
+        // The noisy scans' edge-on cut is checked, and its error names the path.
+        let path = write(
+            "bad-cut.toml",
+            "preset = \"default\"\n[detector.noisy_scan_tests.edge_on_ends]\nmin_points = 2\n",
+        );
+        let e = resolve(path.to_str().unwrap(), 0.01).unwrap_err().to_string();
+        assert!(e.contains("`detector.noisy_scan_tests.edge_on_ends.min_points`"), "{e}");
         // The estimator's recovery is off in the presets; a file turns it
         // on with every field, and a bad value names its path.
         let recovery = |runner_up: f64| {

@@ -31,7 +31,7 @@ pub struct DetectArgs {
     #[command(flatten)]
     log: LogArgs,
     /// Detector: a preset (default, paper, split-and-merge, told-sigma,
-    /// estimated, adaptive) or a configuration file (see `pcaline eval
+    /// datasheet, adaptive) or a configuration file (see `pcaline eval
     /// --show-config`).
     #[arg(long, default_value = "default")]
     config: String,

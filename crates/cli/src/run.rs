@@ -42,7 +42,7 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Detector and map: a preset (default, paper, split-and-merge,
-    /// told-sigma, estimated, adaptive) or a configuration file (see `pcaline eval
+    /// told-sigma, datasheet, adaptive) or a configuration file (see `pcaline eval
     /// --show-config`); the paper preset also brings the paper's heading aiding.
     #[arg(long, default_value = "default")]
     config: String,
