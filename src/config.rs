@@ -226,7 +226,9 @@ impl Default for Config {
     /// a 30 mm sensor as well as the detector told 30 mm, and ranges
     /// rounded to 5 cm do not shred its walls; where the noise is the
     /// nominal's (within 1.5 times it) it is the datasheet detector
-    /// ([`Config::datasheet`]); on a noisier scan it also cuts off line
+    /// ([`Config::datasheet`]), except that far returns clearly quieter
+    /// than the datasheet's far figure set the far band, down to the near
+    /// figure ([`pcaline_segmentation::FarBandFloor`]); on a noisier scan it also cuts off line
     /// ends on a surface seen edge-on ([`NoisyScanTests`]). It differs from the paper where the paper's
     /// fixed thresholds fail under noise: the fixed `DTh` over-segments far
     /// walls, derivative peaks of noisy points split walls every few

@@ -38,7 +38,7 @@ mod split;
 pub use level1::{continues_line, is_break, level1_clusters, seam_start};
 pub use level2::{DerivativeSign, derivative_peak_split};
 pub use noise_estimate::{
-    NoiseEstimate, NoiseEstimation, NoiseScratch, RangeGrid, detect_range_step,
+    FarBandFloor, NoiseEstimate, NoiseEstimation, NoiseScratch, RangeGrid, detect_range_step,
     estimate_range_noise,
 };
 pub use pcaline_geometry::{self as geometry, BearingTable, RangeNoise, Scan, ScanPoints};
