@@ -36,7 +36,9 @@ pub struct Config {
 /// scan is consistent with it (up to
 /// [`NoiseEstimation::consistent_scale`] times it, and a range grid whose
 /// share stays within that), so a scan at the datasheet's noise is not
-/// noisy and is detected exactly as by [`Config::datasheet`]. Thresholds
+/// noisy, and is detected exactly as by [`Config::datasheet`] unless its far
+/// returns are clearly quieter than the datasheet's far figure
+/// ([`pcaline_segmentation::FarBandFloor`]). Thresholds
 /// that follow a raised noise let more through: at 30 mm on a 10 mm sensor
 /// the first 5-10 returns of a surface seen edge-on stay inside every
 /// split threshold and tilt a short wall's line. A test that refuses
