@@ -274,13 +274,18 @@ pub fn estimate_range_noise(
     scratch: &mut NoiseScratch,
 ) -> NoiseEstimate {
     let quantisation = range_step_m.max(0.0) / 12f64.sqrt();
+    // Each band's nominal with the grid's share, and its lowest value.
+    let floors = [nominal.near_sigma_m, nominal.far_sigma_m]
+        .map(|band| band_floor(band, estimation, quantisation));
     // Each band's sigma is the same for every estimate up to this: its
     // lowest allowed value, or, when that is the nominal, the nominal's
     // `consistent_scale` (module docs).
-    let steady = [nominal.near_sigma_m, nominal.far_sigma_m].map(|band| {
-        let (base, lo) = band_floor(band, estimation, quantisation);
-        if lo >= base { estimation.consistent_scale.max(1.0) * base } else { lo }
-    });
+    let steady =
+        floors.map(
+            |(base, lo)| {
+                if lo >= base { estimation.consistent_scale.max(1.0) * base } else { lo }
+            },
+        );
     // Consecutive beams first.
     let (near, far) = (&mut scratch.near, &mut scratch.far);
     let caps = [nominal.near_sigma_m, nominal.far_sigma_m].map(|band| {
@@ -312,19 +317,18 @@ pub fn estimate_range_noise(
         }
     }
     let mut noise = *nominal;
-    // The near band's floor, and the far band's under `far_floor`.
-    let near_floor = band_floor(nominal.near_sigma_m, estimation, quantisation);
+    // How low the far band may fall under `far_floor`.
     let far_floor = match estimation.far_floor {
         FarBandFloor::OwnNominal => None,
-        FarBandFloor::NearNominal => Some(near_floor.0),
+        FarBandFloor::NearNominal => Some(floors[0].0),
     };
     // A far band falls below its nominal only on the word of both
     // spacings, at the larger of their sigmas (at most the nominal): with
-    // the 30-50 far triples
-    // of a scan that sees little far away, one spacing alone falls below
-    // two thirds of the nominal on 1-6% of the scans of a sensor at the
-    // nominal, where a rise above 1.5 times it happens on 0.1-0.4%.
-    let far_base = band_floor(nominal.far_sigma_m, estimation, quantisation).0;
+    // the 30-50 far triples of a scan that sees little far away, one
+    // spacing alone falls below two thirds of the nominal on 1-6% of the
+    // scans of a sensor at the nominal, where a rise above 1.5 times it
+    // happens on 0.1-0.4%.
+    let far_base = floors[1].0;
     if far_floor.is_some_and(|to| to < far_base)
         && let Some(e) = estimates[1]
         && e * estimation.consistent_scale.max(1.0) < far_base
@@ -340,11 +344,13 @@ pub fn estimate_range_noise(
             _ => None,
         };
     }
-    for (band, estimate, lowered_to) in [
+    for ((band, estimate, lowered_to), (base, lo)) in [
         (&mut noise.near_sigma_m, estimates[0], None),
         (&mut noise.far_sigma_m, estimates[1], far_floor),
-    ] {
-        let (base, lo) = band_floor(*band, estimation, quantisation);
+    ]
+    .into_iter()
+    .zip(floors)
+    {
         let hi = (*band * estimation.max_scale).max(base);
         *band = match estimate {
             Some(estimate) if estimate > base => {
@@ -583,17 +589,14 @@ mod tests {
     use rand::{SeedableRng, rngs::StdRng};
     use rand_distr::{Distribution, Normal};
 
-    /// A room-like scan: walls at 3 m and 12 m, corners between them.
-    fn scan(sigma_near: f64, sigma_far: f64, seed: u64) -> ScanPoints {
+    /// The points of a 1081-beam scan from -135° in 0.25° steps whose beam
+    /// `i` at bearing `b` returns the range and noise sigma `surface(i, b)`.
+    fn utm_points(seed: u64, surface: impl Fn(usize, f64) -> (f64, f64)) -> ScanPoints {
         let mut rng = StdRng::seed_from_u64(seed);
         let inc = 0.25f64.to_radians();
         let ranges: Vec<f32> = (0..1081)
             .map(|i| {
-                let b = -135f64.to_radians() + i as f64 * inc;
-                // A 3 m wall across the front half, a 12 m wall behind.
-                let (d, normal) = if b.abs() < 1.0 { (3.0, 0.0) } else { (12.0, b.signum() * 2.0) };
-                let r = d / (b - normal).cos().abs();
-                let sigma = if r < 10.0 { sigma_near } else { sigma_far };
+                let (r, sigma) = surface(i, -135f64.to_radians() + i as f64 * inc);
                 (r + Normal::new(0.0, sigma).unwrap().sample(&mut rng)) as f32
             })
             .collect();
@@ -603,6 +606,16 @@ mod tests {
             &mut BearingTable::default(),
         );
         p
+    }
+
+    /// A room-like scan: walls at 3 m and 12 m, corners between them.
+    fn scan(sigma_near: f64, sigma_far: f64, seed: u64) -> ScanPoints {
+        utm_points(seed, |_, b| {
+            // A 3 m wall across the front half, a 12 m wall behind.
+            let (d, normal) = if b.abs() < 1.0 { (3.0, 0.0) } else { (12.0, b.signum() * 2.0) };
+            let r = d / (b - normal).cos().abs();
+            (r, if r < 10.0 { sigma_near } else { sigma_far })
+        })
     }
 
     /// Unbiased over seeds (mean within 5%; measured -3%), and each scan's
@@ -685,23 +698,11 @@ mod tests {
         let nominal = RangeNoise::utm30lx();
         let e = NoiseEstimation::standard();
         let mut scratch = NoiseScratch::default();
-        let inc = 0.25f64.to_radians();
         let mut lowered = 0;
         for seed in 0..400 {
-            let mut rng = StdRng::seed_from_u64(seed);
-            let ranges: Vec<f32> = (0..1081)
-                .map(|i| {
-                    let b = -135f64.to_radians() + i as f64 * inc;
-                    let (r, sigma) =
-                        if (450..630).contains(&i) { (12.0 / b.cos(), 0.03) } else { (3.0, 0.01) };
-                    (r + Normal::new(0.0, sigma).unwrap().sample(&mut rng)) as f32
-                })
-                .collect();
-            let mut p = ScanPoints::default();
-            p.fill_from(
-                &Scan::new(-135f32.to_radians(), inc as f32, 0.1, 60.0, ranges),
-                &mut BearingTable::default(),
-            );
+            let p = utm_points(seed, |i, b| {
+                if (450..630).contains(&i) { (12.0 / b.cos(), 0.03) } else { (3.0, 0.01) }
+            });
             let n = estimate_range_noise(&p, &nominal, &e, 0.0, &mut scratch);
             assert!(n.samples[1] >= 30 && n.samples[1] < 60, "{n:?}");
             lowered += usize::from(n.noise.far_sigma_m < 0.03);
