@@ -180,9 +180,13 @@ pub fn fit_lines(
                     continue;
                 }
             }
+            // A line the tests below reject whatever its ends is not
+            // walked: cutting them leaves fewer points and less spread.
             if let Some(test) = &config.edge_on_ends
                 && last >= first
                 && moments.n == last - first + 1
+                && moments.n >= config.min_line_points
+                && !config.orientation_test.is_some_and(|t| t.rejects_every_part(&moments, &eigen))
             {
                 let sigma = reference_noise.sigma_at(line.centroid().coords.norm());
                 let (start, end) = edge_on_ends(&xy[first..=last], &moments, sigma, test);
