@@ -506,19 +506,17 @@ pub fn detect_range_step(ranges: &[f32]) -> f64 {
     let valid = |r: f32| r.is_finite() && r > 0.0;
     // Up to 256 evenly spread beams and the beam before each are examined,
     // as many as the triples: enough to meet the step itself among the
-    // differences, and the search costs no more on noisy ranges, where a
-    // difference under 0.5 mm comes late, than on quiet ones.
+    // differences.
     let stride = (ranges.len() / MAX_TRIPLES).max(1);
     let mut smallest = f64::INFINITY;
-    for i in (1..ranges.len()).step_by(stride) {
-        let (p, r) = (ranges[i - 1], ranges[i]);
-        if !(valid(p) && valid(r)) {
-            continue;
-        }
+    for pair in ranges.windows(2).step_by(stride) {
+        let (p, r) = (pair[0], pair[1]);
         let d = (f64::from(r) - f64::from(p)).abs();
         // Equal ranges differ by 0; f32 rounding of one grid value by far
-        // less than 0.05 mm.
-        if d > 5e-5 && d < smallest {
+        // less than 0.05 mm. Both ranges positive and the difference
+        // finite is both valid (an infinite range gives an infinite or NaN
+        // difference, never below `smallest`).
+        if (p > 0.0) & (r > 0.0) & (d > 5e-5) & (d < smallest) {
             smallest = d;
             // No grid can be found once the smallest difference rounds
             // below the finest step tried (0.5 mm): the answer is 0
@@ -531,7 +529,11 @@ pub fn detect_range_step(ranges: &[f32]) -> f64 {
     if !smallest.is_finite() {
         return 0.0;
     }
-    for divisor in 1..=5 {
+    // How many ranges are examined: more than a twentieth of them off a
+    // grid fails it, whatever follows (continuous ranges fail every grid
+    // within a few dozen).
+    let examined = ranges.len().div_ceil(stride);
+    'grids: for divisor in 1..=5 {
         let step = grid_step(smallest, divisor);
         if step < 5e-4 {
             break;
@@ -540,8 +542,16 @@ pub fn detect_range_step(ranges: &[f32]) -> f64 {
         for r in ranges.iter().step_by(stride).copied().filter(|&r| valid(r)) {
             let k = f64::from(r) / step;
             seen += 1;
-            on += usize::from((k - k.round()).abs() < 0.01);
+            // The nearest whole number of steps (k is positive): by
+            // truncation, where `round` is a library call; from 1e15 up
+            // every f64 is whole.
+            let nearest = if k < 1e15 { (k + 0.5) as u64 as f64 } else { k };
+            on += usize::from((k - nearest).abs() < 0.01);
+            if (seen - on) * 20 > examined {
+                continue 'grids;
+            }
         }
+        // (The valid ranges are the same for every grid.)
         if seen < MIN_GRID_RANGES {
             return 0.0;
         }
@@ -811,6 +821,81 @@ mod tests {
         collect_triples(&points, 10.0, 1, [1.0; 2], &mut near, &mut far);
         let consecutive = band_sigma(&mut near, 30).unwrap();
         assert!(consecutive > 0.02, "{consecutive}");
+    }
+
+    /// [`detect_range_step`] as it was before it stopped early on grids
+    /// and lost its branches: every pair examined, validity tested first,
+    /// `round` for the nearest step.
+    fn range_step_reference(ranges: &[f32]) -> f64 {
+        let valid = |r: f32| r.is_finite() && r > 0.0;
+        let stride = (ranges.len() / MAX_TRIPLES).max(1);
+        let mut smallest = f64::INFINITY;
+        for i in (1..ranges.len()).step_by(stride) {
+            let (p, r) = (ranges[i - 1], ranges[i]);
+            if !(valid(p) && valid(r)) {
+                continue;
+            }
+            let d = (f64::from(r) - f64::from(p)).abs();
+            if d > 5e-5 && d < smallest {
+                smallest = d;
+                if grid_step(smallest, 1) < 5e-4 {
+                    return 0.0;
+                }
+            }
+        }
+        if !smallest.is_finite() {
+            return 0.0;
+        }
+        for divisor in 1..=5 {
+            let step = grid_step(smallest, divisor);
+            if step < 5e-4 {
+                break;
+            }
+            let (mut on, mut seen) = (0usize, 0usize);
+            for r in ranges.iter().step_by(stride).copied().filter(|&r| valid(r)) {
+                let k = f64::from(r) / step;
+                seen += 1;
+                on += usize::from((k - k.round()).abs() < 0.01);
+            }
+            if seen < MIN_GRID_RANGES {
+                return 0.0;
+            }
+            if on * 20 >= seen * 19 {
+                return if step <= MAX_GRID_STEP_M { step } else { 0.0 };
+            }
+        }
+        0.0
+    }
+
+    proptest::proptest! {
+        /// The same answer as the reference on ranges on grids of 1 mm to
+        /// 10 cm (some off it), continuous ones, and invalid ones (NaN,
+        /// infinite, zero, negative), for short and long scans.
+        #[test]
+        fn the_range_step_is_the_references(
+            step_mm in proptest::sample::select(vec![1.0f64, 5.0, 10.0, 20.0, 50.0, 100.0]),
+            base in 0.5f64..20.0,
+            beams in 2usize..1500,
+            seed in 0u64..1000,
+            off_grid in 0.0f64..0.1,
+            invalid in 0.0f64..0.3,
+            continuous in proptest::bool::ANY,
+        ) {
+            let mut rng = StdRng::seed_from_u64(seed);
+            let ranges: Vec<f32> = (0..beams)
+                .map(|_| {
+                    let u: f64 = rand::RngExt::random(&mut rng);
+                    if u < invalid {
+                        return [f32::NAN, f32::INFINITY, 0.0, -1.0][(u * 40.0) as usize % 4];
+                    }
+                    let r = base + 3.0 * rand::RngExt::random::<f64>(&mut rng);
+                    let on_grid = (r / (step_mm / 1000.0)).round() * step_mm / 1000.0;
+                    let off = rand::RngExt::random::<f64>(&mut rng) < off_grid;
+                    (if continuous || off { r } else { on_grid }) as f32
+                })
+                .collect();
+            proptest::prop_assert_eq!(detect_range_step(&ranges), range_step_reference(&ranges));
+        }
     }
 
     /// A see-through railing (MIT CSAIL scan 1450): every third beam passes
