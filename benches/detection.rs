@@ -50,6 +50,33 @@ fn detection_by_noise(c: &mut Criterion) {
     group.finish();
 }
 
+/// The same against range noise over a stream: 100 successive frames of
+/// the office scene at a constant 10 mm and 30 mm (time per frame is the
+/// reported time over 100). One scan is one draw of the geometry and the
+/// noise; at 30 mm the bench's single scan happens to be split into four
+/// more pieces than at 10 mm (a 6-point fragment joins a wall's cluster).
+fn detection_by_noise_stream(c: &mut Criterion) {
+    let mut group = c.benchmark_group("detect_100_frames_by_noise");
+    for sigma_mm in [10.0, 30.0] {
+        let text = include_str!("../sim-scenes/office-clutter.toml");
+        let mut scene = pcaline_io::parse_scene(std::path::Path::new("office.toml"), text).unwrap();
+        scene.sensor.range_sigma_m = Some(sigma_mm / 1000.0);
+        let sim = Simulator::new(&scene, 1).unwrap();
+        let scans: Vec<Scan> =
+            (0..100.min(sim.len())).map(|i| sim.frame(i).unwrap().scan).collect();
+        for (preset, config) in [
+            ("default", Config::default()),
+            ("datasheet", Config::datasheet(SensorProfile::Utm30lxEw)),
+        ] {
+            let mut det = LineDetector::new(config).unwrap();
+            group.bench_with_input(BenchmarkId::new(preset, sigma_mm), &scans, |b, scans| {
+                b.iter(|| scans.iter().map(|s| det.detect(black_box(s)).lines.len()).sum::<usize>())
+            });
+        }
+    }
+    group.finish();
+}
+
 fn detection(c: &mut Criterion) {
     let scans = [
         ("office", scan_of(include_str!("../sim-scenes/office-clutter.toml"), "office.toml")),
@@ -145,5 +172,5 @@ fn detection(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, detection, detection_by_noise);
+criterion_group!(benches, detection, detection_by_noise, detection_by_noise_stream);
 criterion_main!(benches);
