@@ -51,27 +51,36 @@ fn detection_by_noise(c: &mut Criterion) {
 }
 
 /// The same against range noise over a stream: 100 successive frames of
-/// the office scene at a constant 10 mm and 30 mm (time per frame is the
-/// reported time over 100). One scan is one draw of the geometry and the
+/// the office and the hall scenes at a constant 10 mm and 30 mm (time per
+/// frame is the reported time over 100). One scan is one draw of the geometry and the
 /// noise; at 30 mm the bench's single scan happens to be split into four
 /// more pieces than at 10 mm (a 6-point fragment joins a wall's cluster).
 fn detection_by_noise_stream(c: &mut Criterion) {
     let mut group = c.benchmark_group("detect_100_frames_by_noise");
-    for sigma_mm in [10.0, 30.0] {
-        let text = include_str!("../sim-scenes/office-clutter.toml");
-        let mut scene = pcaline_io::parse_scene(std::path::Path::new("office.toml"), text).unwrap();
-        scene.sensor.range_sigma_m = Some(sigma_mm / 1000.0);
-        let sim = Simulator::new(&scene, 1).unwrap();
-        let scans: Vec<Scan> =
-            (0..100.min(sim.len())).map(|i| sim.frame(i).unwrap().scan).collect();
-        for (preset, config) in [
-            ("default", Config::default()),
-            ("datasheet", Config::datasheet(SensorProfile::Utm30lxEw)),
-        ] {
-            let mut det = LineDetector::new(config).unwrap();
-            group.bench_with_input(BenchmarkId::new(preset, sigma_mm), &scans, |b, scans| {
-                b.iter(|| scans.iter().map(|s| det.detect(black_box(s)).lines.len()).sum::<usize>())
-            });
+    let scenes = [
+        ("office", include_str!("../sim-scenes/office-clutter.toml")),
+        ("hall", include_str!("../sim-scenes/hall-pillars.toml")),
+    ];
+    for (name, text) in scenes {
+        for sigma_mm in [10.0, 30.0] {
+            let path = std::path::Path::new("scene.toml");
+            let mut scene = pcaline_io::parse_scene(path, text).unwrap();
+            scene.sensor.range_sigma_m = Some(sigma_mm / 1000.0);
+            let sim = Simulator::new(&scene, 1).unwrap();
+            let scans: Vec<Scan> =
+                (0..100.min(sim.len())).map(|i| sim.frame(i).unwrap().scan).collect();
+            for (preset, config) in [
+                ("default", Config::default()),
+                ("datasheet", Config::datasheet(SensorProfile::Utm30lxEw)),
+            ] {
+                let mut det = LineDetector::new(config).unwrap();
+                let id = BenchmarkId::new(format!("{preset}/{name}"), sigma_mm);
+                group.bench_with_input(id, &scans, |b, scans| {
+                    b.iter(|| {
+                        scans.iter().map(|s| det.detect(black_box(s)).lines.len()).sum::<usize>()
+                    })
+                });
+            }
         }
     }
     group.finish();
