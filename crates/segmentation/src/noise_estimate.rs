@@ -210,10 +210,9 @@ impl NoiseEstimation {
 pub struct NoiseScratch {
     near: Vec<u64>,
     far: Vec<u64>,
-    /// A band's residuals reordered by the selection.
+    /// A band's residuals (or their differences, [`sawtooth_possible`])
+    /// reordered by the selection.
     selected: Vec<u64>,
-    /// Differences of neighbouring residuals ([`sawtooth_possible`]).
-    differences: Vec<u64>,
 }
 
 /// Most triples examined per scan: beyond a few hundred the median is
@@ -323,13 +322,7 @@ pub fn estimate_range_noise(
     if (0..2).any(|k| {
         estimates[k].is_some_and(|e| {
             e > steady[k]
-                && sawtooth_possible(
-                    [&*near, &*far][k],
-                    apart,
-                    e,
-                    estimation.min_samples,
-                    [&mut scratch.differences, &mut *selected],
-                )
+                && sawtooth_possible([&*near, &*far][k], apart, e, estimation.min_samples, selected)
         })
     }) {
         collect_triples(points, nominal.far_from_m, 2, caps, near, far);
@@ -460,13 +453,13 @@ const SAWTOOTH_RATIO: f64 = 1.1;
 /// differences' sigma (the mean of their smaller half, as [`band_sigma`])
 /// is compared with `sigma_m`: more than [`SAWTOOTH_RATIO`] times it, or
 /// fewer than `min_samples` differences to tell, is a possible sawtooth.
-/// `scratch` holds the differences and their selection.
+/// `scratch` holds the differences' magnitudes for their selection.
 fn sawtooth_possible(
     stored: &[u64],
     apart: usize,
     sigma_m: f64,
     min_samples: usize,
-    [scratch, selected]: [&mut Vec<u64>; 2],
+    scratch: &mut Vec<u64>,
 ) -> bool {
     scratch.clear();
     let mut picked = stored.iter().step_by(apart.max(1)).map(|&bits| f64::from_bits(bits));
@@ -474,12 +467,12 @@ fn sawtooth_possible(
         return true;
     };
     for x in picked {
-        scratch.push((x - last).to_bits());
+        scratch.push((x - last).abs().to_bits());
         last = x;
     }
     // A difference has twice a residual's variance: 3 sigma² for white
     // noise, where a residual has 1.5.
-    let Some(differences) = band_sigma(scratch, selected, min_samples) else {
+    let Some(differences) = smaller_half_sigma(scratch, min_samples) else {
         return true;
     };
     sigma_m > SAWTOOTH_RATIO * differences / 2f64.sqrt()
@@ -666,7 +659,15 @@ fn band_sigma(stored: &[u64], selected: &mut Vec<u64>, min_samples: usize) -> Op
     }
     selected.clear();
     selected.extend(stored.iter().map(|bits| bits & !(1 << 63)));
-    let residuals = selected.as_mut_slice();
+    smaller_half_sigma(selected, min_samples)
+}
+
+/// [`band_sigma`] of absolute values given as their bits, reordered in
+/// place.
+fn smaller_half_sigma(residuals: &mut [u64], min_samples: usize) -> Option<f64> {
+    if residuals.len() < min_samples.max(2) {
+        return None;
+    }
     let half = residuals.len() / 2;
     residuals.select_nth_unstable(half);
     let mean = residuals[..half].iter().map(|&b| f64::from_bits(b)).sum::<f64>() / half as f64;
@@ -945,7 +946,7 @@ mod tests {
             let every_other = band_sigma(&near, &mut Vec::new(), 30).unwrap();
             let collected = collect_triples(points, 30.0, 1, [1.0; 2], &mut near, &mut far);
             let consecutive = band_sigma(&near, &mut Vec::new(), 30).unwrap();
-            let scratch = [&mut Vec::new(), &mut Vec::new()];
+            let scratch = &mut Vec::new();
             let apart = apart.unwrap_or(collected);
             (
                 consecutive > INTERLACE_RATIO * every_other,
