@@ -168,7 +168,7 @@ impl Mapper {
         };
         self.last_source = scan.stamp_s.map(|t| (t, source));
         self.detect(scan, velocity);
-        let (pose, report) = self.localizer.step_with(scan.stamp_s, &source, &self.detected);
+        let (pose, report) = self.localizer.step_scan(scan, &source, &self.detected);
         self.step(pose, report)
     }
 

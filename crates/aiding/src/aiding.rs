@@ -8,13 +8,14 @@ use crate::{
     MAX_TURN_RATE_RAD_S, NormalConstraint, Prediction, SourceCalibration, StepReport,
 };
 use crate::{
-    MotionNoise, gate_distance2, heading_correction, iterated_update, joint_consistent, measure,
-    predict, rotate_step, solve_translation, weighted_offset,
+    MotionNoise, Registration, fuse_registration, gate_distance2, heading_correction,
+    iterated_update, joint_consistent, measure, predict, predict_with, rotate_step,
+    solve_translation, weighted_offset,
 };
 use crate::{PoseWindow, WindowStep};
 use pcaline_fitting::Moments;
 use pcaline_geometry::{
-    ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2, Vector3,
+    ConfigError, LineSegment, Matrix3, Point2, Pose2, Twist2, Vector2, Vector3, wrap_angle,
 };
 use pcaline_mapping::{LineId, LineMap, LineStatus, MapConfig, MapLine, MatchGate};
 
@@ -130,6 +131,14 @@ pub struct Aiding {
     /// The step being processed: its increment and the increment's
     /// covariance (for the window).
     pending_step: Option<(Pose2, Matrix3<f64>)>,
+    /// The next step's scan registered to the previous scan
+    /// ([`Aiding::set_registration`]).
+    registration: Option<Registration>,
+    /// Factor on the source's noise model judged by the scan registrations
+    /// ([`fuse_registration`]; 1 until the first).
+    registration_scale: f64,
+    /// This step's prediction used a registration.
+    step_registered: bool,
     /// The last step's consistent matches (for the window).
     last_consistent: Vec<(LineSegment, MapLine)>,
     /// Where the estimate stood at the source's last pose, while scans
@@ -185,6 +194,9 @@ impl Aiding {
             associations: Vec::new(),
             window: None,
             pending_step: None,
+            registration: None,
+            registration_scale: 1.0,
+            step_registered: false,
             last_consistent: Vec::new(),
             gap: None,
         })
@@ -423,6 +435,15 @@ impl Aiding {
         self.process(predicted, cov, Prediction::ConstantVelocity, None, lines)
     }
 
+    /// The next scan registered to the previous one
+    /// ([`crate::ScanRegistrar::next`]): the next step that takes the
+    /// source's increment fuses it with the registration when
+    /// [`crate::EstimatorConfig::scan_matching`] is set
+    /// ([`fuse_registration`]). Every step clears it, used or not.
+    pub fn set_registration(&mut self, registration: Option<Registration>) {
+        self.registration = registration;
+    }
+
     /// Processes one scan given the source's motion since the previous scan
     /// (an odometry or inertial increment, in the previous body frame).
     pub fn step_increment(
@@ -434,6 +455,7 @@ impl Aiding {
             return self.fall_back(Fallback::NonFiniteSource);
         }
         let previous = self.corrected.unwrap_or_default();
+        self.step_registered = false;
         let e = &self.config.estimator;
         let jumped = !self.plausible_source_step(increment);
         let dt = self.step_dt();
@@ -447,18 +469,57 @@ impl Aiding {
             (Some(c), false) => self.calibration.correct(&c, &increment, dt),
             _ => (increment, 0.0, 0.0),
         };
-        let (predicted, mut cov) = predict(&previous, &self.covariance, &increment, &noise);
-        self.pending_step = Some((increment, noise.covariance(&increment)));
-        // The calibration's own uncertainty over the step.
-        let step_world = predicted.translation() - previous.translation();
-        cov[(2, 2)] += var_heading;
-        self.calibration_var_heading = var_heading;
-        let len = step_world.norm();
+        // The step's noise in the previous body frame, the calibration's own
+        // uncertainty over the step included.
+        let mut calibration_cov = Matrix3::zeros();
+        calibration_cov[(2, 2)] = var_heading;
+        let len = increment.x().hypot(increment.y());
         if len > 0.0 {
-            let u = step_world / len;
-            let mut t = cov.fixed_view_mut::<2, 2>(0, 0);
+            let u = increment.translation() / len;
+            let mut t = calibration_cov.fixed_view_mut::<2, 2>(0, 0);
             t += u * u.transpose() * var_along;
         }
+        let step_cov = noise.covariance(&increment) + calibration_cov;
+        self.calibration_var_heading = var_heading;
+        let registration = std::mem::take(&mut self.registration);
+        let (increment, step_cov) = match (registration, e.scan_matching, jumped) {
+            (Some(r), Some(c), false) => {
+                // The source's covariance as the registrations judge it: the
+                // model's (the calibration's share included) times a scale
+                // adapted from their disagreement, apart from the line
+                // matches' own adaptation. At a scale of 1 or less the
+                // source is no worse than its model: kept as it is, the
+                // registration only judging it.
+                let doubtful = self.registration_scale > 1.0;
+                let source_cov = e.motion.scaled(self.registration_scale).covariance(&increment)
+                    + calibration_cov;
+                let f = fuse_registration(&increment, &source_cov, &r, &c, true);
+                if f.distance2.is_finite()
+                    && let Some(a) = e.adaptation
+                {
+                    self.registration_scale = a.next(self.registration_scale, f.distance2, 3);
+                }
+                match (doubtful, e.calibration) {
+                    (false, _) => (increment, step_cov),
+                    (true, calibration) => {
+                        self.step_registered = true;
+                        // The registration measures the step: what it
+                        // corrects of the calibrated increment's heading is
+                        // the calibration's to learn (the line matches then
+                        // find little left).
+                        if let Some(cal) = calibration {
+                            let heading = wrap_angle(f.increment.heading() - increment.heading());
+                            self.calibration.observe(&cal, dt, heading, &source_cov, &f.covariance);
+                        }
+                        (f.increment, f.covariance)
+                    }
+                }
+            }
+            _ => (increment, step_cov),
+        };
+        let (predicted, mut cov) = predict_with(&previous, &self.covariance, &increment, &step_cov);
+        self.pending_step = Some((increment, step_cov));
+        let step_world = predicted.translation() - previous.translation();
         if !predicted.is_finite() {
             return self.fall_back(Fallback::NonFiniteSource);
         }
@@ -496,6 +557,7 @@ impl Aiding {
 
     /// Keeps the last corrected pose (or the identity) and reports why.
     fn fall_back(&mut self, why: Fallback) -> (Pose2, StepReport) {
+        self.registration = None;
         let pose = self.corrected.unwrap_or_default();
         self.associations.clear();
         (
@@ -525,6 +587,8 @@ impl Aiding {
         fallback: Option<Fallback>,
         lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
+        // A registration not taken by this step is not the next step's.
+        self.registration = None;
         self.map.begin_scan();
         self.associations.clear();
         self.last_consistent.clear();
@@ -796,7 +860,9 @@ impl Aiding {
     ) -> (Pose2, StepReport, bool) {
         let e = self.config.estimator;
         report.correction_distance2 = update.correction_distance2;
-        if let Some(a) = e.adaptation {
+        // The scale is the source's: a step predicted with a scan
+        // registration says nothing of it.
+        if let (Some(a), false) = (e.adaptation, std::mem::take(&mut self.step_registered)) {
             self.motion_noise_scale =
                 a.next(self.motion_noise_scale, update.correction_distance2, update.correction_dof);
         }

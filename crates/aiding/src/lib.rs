@@ -40,6 +40,7 @@ mod pose_graph;
 mod pose_update;
 mod pose_window;
 mod recovery;
+mod scan_registration;
 mod source_calibration;
 mod translation;
 
@@ -56,7 +57,7 @@ pub use loop_closure::{
     Keyframe, LoopClosing, LoopClosureConfig, LoopOutcome, LoopRecord, LoopSearch, LoopStep,
     OptimizeSchedule,
 };
-pub use motion_noise::{MotionNoise, predict};
+pub use motion_noise::{MotionNoise, predict, predict_with};
 pub use place_descriptor::{
     PlaceDescriptor, PlaceRecognitionConfig, SEPARATION_BIN_M, SEPARATION_BINS,
 };
@@ -66,6 +67,10 @@ pub use pose_graph::{
 pub use pose_update::{PoseUpdate, gate_distance2, iterated_update, joint_consistent};
 pub use pose_window::{MeasureAt, PoseWindow, WindowStep};
 pub use recovery::{Recovered, Recovery, recover};
+pub use scan_registration::{
+    BeamCloud, FusedIncrement, Registration, ScanMatchConfig, ScanRegistrar, fuse_registration,
+    register_scans,
+};
 pub use source_calibration::{
     CalibrationConfig, MAX_TURN_RATE_RAD_S, STILL_STEP_M, STILL_TURN_RAD, SourceCalibration,
 };
@@ -179,6 +184,19 @@ pub struct EstimatorConfig {
     /// it pulls a drifting source back better, but moves the results on MIT
     /// CSAIL's raw odometry unpredictably.
     pub recovery: Option<Recovery>,
+    /// Each scan registered to the previous one ([`ScanRegistrar`], run
+    /// by [`Localizer::step_scan`]) and the registration fused with the
+    /// source's increment ([`fuse_registration`]) once the registrations
+    /// find the source worse than its noise model: their disagreement
+    /// adapts a scale on the model of its own, and while that scale stays
+    /// at or below 1 the source is kept as it is (a good source comes out
+    /// as before). A registration-fused step teaches the calibration its
+    /// heading correction and does not adapt the line matches' motion
+    /// noise scale. `None`: the source alone. Beyond the paper; the
+    /// default since 2026-12-05 (`docs/accuracy.md`, "Scan-to-scan
+    /// registration"). In a configuration file, `scan_matching = false`
+    /// turns it off.
+    pub scan_matching: Option<ScanMatchConfig>,
 }
 
 /// The largest accelerations of a sensor carried without a motion source
@@ -286,6 +304,7 @@ impl EstimatorConfig {
             max_source_step_m: 5.0,
             max_source_turn_rad: std::f64::consts::FRAC_PI_2,
             recovery: None,
+            scan_matching: Some(ScanMatchConfig::standard()),
         }
     }
 
@@ -295,6 +314,9 @@ impl EstimatorConfig {
         const P: &str = "aiding.estimator";
         self.motion.validate("aiding.estimator.motion")?;
         self.constant_velocity.validate("aiding.estimator.constant_velocity")?;
+        if let Some(s) = &self.scan_matching {
+            s.validate()?;
+        }
         ConfigError::positive_fields(
             P,
             &[

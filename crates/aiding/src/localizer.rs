@@ -1,47 +1,88 @@
 //! [`Localizer`]: the aiding alone or with loop closure on top, behind one
 //! set of steps, for callers that offer both (the facade's `Mapper`,
-//! `pcaline map`, `pcaline eval --real`).
+//! `pcaline map`, `pcaline eval --real`), each scan registered to the
+//! previous one for the estimator ([`ScanRegistrar`]) when the
+//! configuration asks for it.
 
-use crate::{Aiding, AidingConfig, LoopClosing, LoopClosureConfig, ObservedLine, StepReport};
-use pcaline_geometry::{ConfigError, Pose2, Twist2};
+use crate::{
+    Aiding, AidingConfig, AidingMode, LoopClosing, LoopClosureConfig, ObservedLine, ScanRegistrar,
+    StepReport,
+};
+use pcaline_geometry::{ConfigError, Pose2, Scan, Twist2};
 use pcaline_mapping::{LineMap, MapConfig};
 
 /// One localization loop: the aiding alone, or with loop closure on top.
 #[derive(Debug, Clone)]
-#[non_exhaustive]
-pub enum Localizer {
+pub struct Localizer {
+    runner: Runner,
+    registrar: Option<ScanRegistrar>,
+}
+
+#[derive(Debug, Clone)]
+enum Runner {
     /// The aiding alone.
     Plain(Box<Aiding>),
     /// Keyframes, loop closure and a pose graph on top of the aiding.
     Loops(Box<LoopClosing>),
 }
 
+use Runner as R;
+
 impl Localizer {
-    /// A loop with an empty map; with loop closure when `loops` is given.
+    /// A loop with an empty map; with loop closure when `loops` is given,
+    /// and with each scan registered to the previous one in
+    /// [`Self::step_scan`] when `aiding` is the estimator and its
+    /// `scan_matching` is set.
     pub fn new(
         aiding: AidingConfig,
         map: MapConfig,
         loops: Option<LoopClosureConfig>,
     ) -> Result<Self, ConfigError> {
-        Ok(match loops {
-            None => Localizer::Plain(Box::new(Aiding::new(aiding, map)?)),
-            Some(l) => Localizer::Loops(Box::new(LoopClosing::new(aiding, map, l)?)),
-        })
+        let registrar = match (aiding.mode, aiding.estimator.scan_matching) {
+            (AidingMode::Estimator, Some(c)) => Some(ScanRegistrar::new(c)?),
+            _ => None,
+        };
+        let runner = match loops {
+            None => R::Plain(Box::new(Aiding::new(aiding, map)?)),
+            Some(l) => R::Loops(Box::new(LoopClosing::new(aiding, map, l)?)),
+        };
+        Ok(Localizer { runner, registrar })
+    }
+
+    /// One scan `scan` (its stamp, if any, is the step's) with the source's
+    /// pose `source` and the scan's lines: [`Self::step_with`], the scan
+    /// first registered to the previous one and the registration handed to
+    /// the estimator ([`Aiding::set_registration`]) when the configuration
+    /// asks for it. Returns the pose and the step's report.
+    pub fn step_scan(
+        &mut self,
+        scan: &Scan,
+        source: &Pose2,
+        lines: &[impl ObservedLine],
+    ) -> (Pose2, StepReport) {
+        if let Some(registrar) = &mut self.registrar {
+            let registration = registrar.next(source, scan);
+            match &mut self.runner {
+                R::Plain(a) => a.set_registration(registration),
+                R::Loops(l) => l.set_registration(registration),
+            }
+        }
+        self.step_with(scan.stamp_s, source, lines)
     }
 
     /// The aiding (the estimator under the loop closure).
     pub fn aiding(&self) -> &Aiding {
-        match self {
-            Localizer::Plain(a) => a,
-            Localizer::Loops(l) => l.aiding(),
+        match &self.runner {
+            R::Plain(a) => a,
+            R::Loops(l) => l.aiding(),
         }
     }
 
     /// The loop closure, if on.
     pub fn loop_closing(&self) -> Option<&LoopClosing> {
-        match self {
-            Localizer::Plain(_) => None,
-            Localizer::Loops(l) => Some(l),
+        match &self.runner {
+            R::Plain(_) => None,
+            R::Loops(l) => Some(l),
         }
     }
 
@@ -62,9 +103,9 @@ impl Localizer {
 
     /// Optimizes the graph now (with loop closure; `None` without).
     pub fn optimize(&mut self) -> Option<crate::OptimizeReport> {
-        match self {
-            Localizer::Plain(_) => None,
-            Localizer::Loops(l) => Some(l.optimize()),
+        match &mut self.runner {
+            R::Plain(_) => None,
+            R::Loops(l) => Some(l.optimize()),
         }
     }
 
@@ -76,14 +117,14 @@ impl Localizer {
         source: &Pose2,
         lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
-        match (self, stamp_s) {
-            (Localizer::Plain(a), Some(t)) => a.step_at(t, source, lines),
-            (Localizer::Plain(a), None) => a.step(source, lines),
-            (Localizer::Loops(l), Some(t)) => {
+        match (&mut self.runner, stamp_s) {
+            (R::Plain(a), Some(t)) => a.step_at(t, source, lines),
+            (R::Plain(a), None) => a.step(source, lines),
+            (R::Loops(l), Some(t)) => {
                 let s = l.step_at(t, source, lines);
                 (s.pose, s.report)
             }
-            (Localizer::Loops(l), None) => {
+            (R::Loops(l), None) => {
                 let s = l.step(source, lines);
                 (s.pose, s.report)
             }
@@ -96,9 +137,9 @@ impl Localizer {
         stamp_s: Option<f64>,
         lines: &[impl ObservedLine],
     ) -> (Pose2, StepReport) {
-        match self {
-            Localizer::Plain(a) => a.step_without_source(stamp_s, lines),
-            Localizer::Loops(l) => {
+        match &mut self.runner {
+            R::Plain(a) => a.step_without_source(stamp_s, lines),
+            R::Loops(l) => {
                 let s = l.step_without_source(stamp_s, lines);
                 (s.pose, s.report)
             }
@@ -110,9 +151,9 @@ impl Localizer {
     /// `None`). `None` for the aiding alone, whose poses are final as they
     /// come.
     pub fn finish(&mut self) -> Option<Vec<Option<Pose2>>> {
-        match self {
-            Localizer::Plain(_) => None,
-            Localizer::Loops(l) => {
+        match &mut self.runner {
+            R::Plain(_) => None,
+            R::Loops(l) => {
                 l.optimize();
                 Some(l.trajectory())
             }

@@ -577,6 +577,12 @@ impl LoopClosing {
         self.after_step(pose, report, Some(stamp_s), lines)
     }
 
+    /// The next scan's registration to the previous one, for the estimator
+    /// ([`Aiding::set_registration`]).
+    pub fn set_registration(&mut self, registration: Option<crate::Registration>) {
+        self.aiding.set_registration(registration);
+    }
+
     /// One scan with the source's pose, unstamped ([`Aiding::step`]).
     pub fn step(&mut self, source: &Pose2, lines: &[impl ObservedLine]) -> LoopStep {
         let (pose, report) = self.aiding.step(source, lines);

@@ -161,6 +161,19 @@ pub fn predict(
     increment: &Pose2,
     noise: &MotionNoise,
 ) -> (Pose2, Matrix3<f64>) {
+    predict_with(pose, covariance, increment, &noise.covariance(increment))
+}
+
+/// [`predict`] with the increment's own covariance `increment_covariance`
+/// (previous body frame, `(x, y, heading)`) instead of a noise model's: an
+/// increment fused with a scan registration
+/// ([`crate::fuse_registration`]) carries the fused covariance.
+pub fn predict_with(
+    pose: &Pose2,
+    covariance: &Matrix3<f64>,
+    increment: &Pose2,
+    increment_covariance: &Matrix3<f64>,
+) -> (Pose2, Matrix3<f64>) {
     let predicted = pose.compose(increment);
     let (s, c) = pose.heading().sin_cos();
     let (ux, uy) = (increment.x(), increment.y());
@@ -176,7 +189,7 @@ pub fn predict(
         s, c, 0.0,
         0.0, 0.0, 1.0,
     );
-    let p = f * covariance * f.transpose() + g * noise.covariance(increment) * g.transpose();
+    let p = f * covariance * f.transpose() + g * increment_covariance * g.transpose();
     (predicted, (p + p.transpose()) * 0.5)
 }
 

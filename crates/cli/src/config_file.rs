@@ -391,8 +391,9 @@ fn merge(base: &mut Value, overrides: &Value, path: &str) -> Result<(), String> 
 
 /// Fields of type `Option<_>` that a preset may leave out (`None`).
 fn optional_field(path: &str) -> bool {
-    const OPTIONAL: [&str; 23] = [
+    const OPTIONAL: [&str; 24] = [
         "map.lifecycle",
+        "aiding.estimator.scan_matching",
         "aiding.estimator.window",
         "aiding.estimator.recovery",
         "aiding.estimator.tentative_variance_scale",
@@ -619,6 +620,21 @@ mod tests {
         let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
         assert_eq!(c.detector.noisy_scan_tests, None);
         assert_eq!(c.detector.noise_estimation, Config::default().noise_estimation);
+        // Scan-to-scan registration is on in the default, off with `false`,
+        // and its settings are checked with the path named.
+        assert!(c.aiding.estimator.scan_matching.is_some());
+        let path = write(
+            "no-registration.toml",
+            "preset = \"default\"\n[aiding.estimator]\nscan_matching = false\n",
+        );
+        let c = resolve(path.to_str().unwrap(), 0.01).unwrap();
+        assert_eq!(c.aiding.estimator.scan_matching, None);
+        let path = write(
+            "bad-registration.toml",
+            "preset = \"default\"\n[aiding.estimator.scan_matching]\ninlier_m = -1.0\n",
+        );
+        let e = resolve(path.to_str().unwrap(), 0.01).unwrap_err().to_string();
+        assert!(e.contains("`aiding.estimator.scan_matching.inlier_m`"), "{e}");
         // The noisy scans' edge-on cut is checked, and its error names the path.
         let path = write(
             "bad-cut.toml",

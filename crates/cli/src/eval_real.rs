@@ -389,7 +389,7 @@ impl Loops {
     fn step(&mut self, scan: &pcaline::Scan, source: &Pose2) -> Vec<Pose2> {
         // The localizers take the detector's lines as they are.
         let lines = self.detector.detect(scan).lines;
-        self.loops.iter_mut().map(|a| a.step_with(scan.stamp_s, source, lines).0).collect()
+        self.loops.iter_mut().map(|a| a.step_scan(scan, source, lines).0).collect()
     }
 
     /// Replaces the poses of the loop-closing modes by their optimized
@@ -449,17 +449,17 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
     let mut loops = Loops::new(config)?;
     let mut poses: Vec<Vec<Pose2>> = vec![Vec::new(); modes(config).len()];
     let mut sources = Vec::new();
-    // Each scan's stamp and lines, kept for the sensitivity runs.
-    let mut kept: Vec<(Option<f64>, Vec<SensorLine>)> = Vec::new();
+    // Each scan and its lines, kept for the sensitivity runs.
+    let mut kept: Vec<(pcaline::Scan, Vec<SensorLine>)> = Vec::new();
     for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
         let LogRecord::Scan(s) = record? else { continue };
         let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
         let lines = loops.detector.detect(&s.scan).lines;
         for (out, l) in poses.iter_mut().zip(&mut loops.loops) {
-            out.push(l.step_with(s.scan.stamp_s, &source, lines).0);
+            out.push(l.step_scan(&s.scan, &source, lines).0);
         }
         if sensitivity {
-            kept.push((s.scan.stamp_s, lines.iter().map(SensorLine::from).collect()));
+            kept.push((s.scan.clone(), lines.iter().map(SensorLine::from).collect()));
         }
         sources.push(source);
     }
@@ -479,7 +479,7 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
     let sensitivity = if sensitivity {
         // The stamps of a log without them count one second a scan.
         let times: Vec<f64> =
-            kept.iter().enumerate().map(|(k, (t, _))| t.unwrap_or(k as f64)).collect();
+            kept.iter().enumerate().map(|(k, (s, _))| s.stamp_s.unwrap_or(k as f64)).collect();
         let runs: Vec<(u64, &'static str, AidingConfig, Option<LoopClosureConfig>)> =
             sensitivity_seeds
                 .iter()
@@ -497,7 +497,7 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
                 let mut est: Vec<Pose2> = kept
                     .iter()
                     .zip(&source_poses)
-                    .map(|((stamp, lines), source)| localizer.step_with(*stamp, source, lines).0)
+                    .map(|((scan, lines), source)| localizer.step_scan(scan, source, lines).0)
                     .collect();
                 take_optimized(&mut localizer, &mut est);
                 let loops = localizer.loop_closing().map(|l| loop_row(name, l, reference));
@@ -716,6 +716,9 @@ struct IntelRecord {
     time_s: f64,
     pose: Pose2,
     lines: Option<Vec<SensorLine>>,
+    /// The scan of a scan record, stamped `time_s` (for the estimator's
+    /// scan-to-scan registration).
+    scan: Option<pcaline::Scan>,
 }
 
 /// How far an aided trajectory moved a log's own poses, when they are fed
@@ -790,8 +793,11 @@ fn intel_records(data: &Path, config: &NamedConfig) -> Result<IntelLog> {
                 time_s: s.scan.stamp_s.context("a FLASER line without a timestamp")?,
                 pose: s.pose.context("a FLASER line without a pose")?,
                 lines: Some(detector.detect(&s.scan).lines.iter().map(SensorLine::from).collect()),
+                scan: Some(s.scan),
             },
-            LogRecord::Odometry(o) => IntelRecord { time_s: o.stamp_s, pose: o.pose, lines: None },
+            LogRecord::Odometry(o) => {
+                IntelRecord { time_s: o.stamp_s, pose: o.pose, lines: None, scan: None }
+            }
             // A CARMEN log has scans and odometry only.
             _ => continue,
         });
@@ -835,9 +841,9 @@ fn intel_run(
     let mut at_scan: Vec<Vec<Option<Pose2>>> = vec![vec![None; records.len()]; loops.len()];
     let mut scan_records = Vec::new();
     for (i, (record, source)) in records.iter().zip(source).enumerate() {
-        if let Some(lines) = &record.lines {
+        if let (Some(lines), Some(scan)) = (&record.lines, &record.scan) {
             for (runner, poses) in loops.iter_mut().zip(&mut at_scan) {
-                poses[i] = Some(runner.step_with(Some(record.time_s), source, lines).0);
+                poses[i] = Some(runner.step_scan(scan, source, lines).0);
             }
             scan_records.push(i);
         }
@@ -1184,7 +1190,7 @@ mod tests {
     use super::*;
 
     fn record(time_s: f64, pose: Pose2, scan: bool) -> IntelRecord {
-        IntelRecord { time_s, pose, lines: scan.then(Vec::new) }
+        IntelRecord { time_s, pose, lines: scan.then(Vec::new), scan: None }
     }
 
     fn close(a: &Pose2, b: &Pose2) -> bool {

@@ -142,7 +142,7 @@ impl AidedRun {
             last = Some((frame.time_s, frame.odometry_pose));
             let lines = lines_of(&frame, velocity);
             for (localizer, out) in loops.iter_mut().zip(estimates.iter_mut()) {
-                out.push(localizer.step_with(Some(frame.time_s), &frame.odometry_pose, &lines).0);
+                out.push(localizer.step_scan(&frame.scan, &frame.odometry_pose, &lines).0);
             }
             observe(RunStep { frame: &frame, lines: &lines, loops: &loops })
                 .map_err(ObservedRunError::Stopped)?;
