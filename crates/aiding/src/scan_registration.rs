@@ -74,11 +74,13 @@ pub struct ScanMatchConfig {
     /// increment is kept.
     pub min_information_per_point: f64,
     /// Standard deviation of a point's residual to its line, metres: the
-    /// registration's covariance is `point_sigma_m² (Σ w J Jᵀ)⁻¹`. 0.1 m,
-    /// three times the Cauchy scale: with 0.03 m the predicted heading
-    /// spread (0.15° at the median on Intel) was a third of the spread
-    /// measured against Intel's corrected poses, since neighbouring points'
-    /// errors (their normals, the beams' sampling) are not independent.
+    /// registration's covariance is `point_sigma_m² (Σ w J Jᵀ)⁻¹`. 3 cm, the
+    /// Cauchy scale. Against the logs' corrected poses the predicted heading
+    /// spread is about a third of the measured one, but those differences
+    /// carry the corrected poses' own error; inflating the covariance
+    /// threefold or by 5/3 gave up 2.1° and 0.5° of MIT CSAIL's raw heading
+    /// and changed nothing for a good source (`docs/accuracy.md`,
+    /// "Scan-to-scan registration").
     pub point_sigma_m: f64,
     /// A registration farther than this from the source (squared
     /// Mahalanobis distance over both covariances) conflicts with it
@@ -90,7 +92,11 @@ impl ScanMatchConfig {
     /// The default: searched over 2° around each point's beam, 20 iterations
     /// with gates of 0.5, 0.25 and 0.12 m, Cauchy scale 3 cm, ranges to
     /// 30 m, an agreeing point within 3 cm, half the points agreeing to use
-    /// the registration, 80% to skip the turned guesses (±10°, ±20°, ±30°).
+    /// the registration, 80% to skip the turned guesses (±10°, ±20°, ±30°),
+    /// which replace it with 1.2 times its agreeing points; the
+    /// registration's covariance at a point sigma of 3 cm, a conflict beyond
+    /// a squared Mahalanobis distance of 16.3 (99.9% for 3 degrees of
+    /// freedom).
     pub const fn standard() -> Self {
         const DEG: f64 = std::f64::consts::PI / 180.0;
         ScanMatchConfig {
@@ -115,7 +121,7 @@ impl ScanMatchConfig {
             other_guess_ratio: 1.2,
             min_inlier_share: 0.5,
             min_information_per_point: 0.02,
-            point_sigma_m: 0.1,
+            point_sigma_m: 0.03,
             conflict_chi2: 16.3,
         }
     }
