@@ -499,20 +499,19 @@ impl Aiding {
                 {
                     self.registration_scale = a.next(self.registration_scale, f.distance2, 3);
                 }
-                match (doubtful, e.calibration) {
-                    (false, _) => (increment, step_cov),
-                    (true, calibration) => {
-                        self.step_registered = true;
-                        // The registration measures the step: what it
-                        // corrects of the calibrated increment's heading is
-                        // the calibration's to learn (the line matches then
-                        // find little left).
-                        if let Some(cal) = calibration {
-                            let heading = wrap_angle(f.increment.heading() - increment.heading());
-                            self.calibration.observe(&cal, dt, heading, &source_cov, &f.covariance);
-                        }
-                        (f.increment, f.covariance)
+                if doubtful {
+                    self.step_registered = true;
+                    // The registration measures the step: what it corrects
+                    // of the calibrated increment's heading is the
+                    // calibration's to learn (the line matches then find
+                    // little left).
+                    if let Some(cal) = e.calibration {
+                        let heading = wrap_angle(f.increment.heading() - increment.heading());
+                        self.calibration.observe(&cal, dt, heading, &source_cov, &f.covariance);
                     }
+                    (f.increment, f.covariance)
+                } else {
+                    (increment, step_cov)
                 }
             }
             _ => (increment, step_cov),
