@@ -348,26 +348,46 @@ pub fn register_scans(
             break;
         }
     }
+    Some(Registration {
+        reference_from_current: Pose2::new(pose.x(), pose.y(), wrap_angle(pose.heading())),
+        information,
+        associated,
+        inliers: agreeing_points(reference, current, &pose, config),
+        points: current.len(),
+    })
+}
+
+/// Points of `current`, placed in `reference`'s frame by
+/// `reference_from_current`, that agree with `reference`: within the last of
+/// [`ScanMatchConfig::gates_m`] of a reference point with a normal, and
+/// within [`ScanMatchConfig::inlier_m`] of its line. What
+/// [`Registration::inliers`] counts at the registration's solution; usable
+/// on its own to judge a pose from elsewhere (a reference trajectory, say)
+/// by the scans. Zero for a non-finite pose, an empty cloud or a reference
+/// without geometry.
+pub fn agreeing_points(
+    reference: &BeamCloud,
+    current: &BeamCloud,
+    reference_from_current: &Pose2,
+    config: &ScanMatchConfig,
+) -> usize {
+    if !reference_from_current.is_finite() || reference.is_empty() {
+        return 0;
+    }
+    let half_width = (config.search_half_width_rad / reference.increment_rad.abs()).ceil() as isize;
     let last_gate = config.gates_m[2];
-    let inliers = current
+    current
         .points
         .iter()
         .filter(|q| q[0].is_finite())
         .filter(|q| {
-            let q = pose.transform_point(&Point2::new(q[0], q[1]));
+            let q = reference_from_current.transform_point(&Point2::new(q[0], q[1]));
             reference.nearest(&q, half_width, last_gate).is_some_and(|k| {
                 let (p, n) = (reference.points[k], reference.normals[k]);
                 (n[0] * (q.x - p[0]) + n[1] * (q.y - p[1])).abs() <= config.inlier_m
             })
         })
-        .count();
-    Some(Registration {
-        reference_from_current: Pose2::new(pose.x(), pose.y(), wrap_angle(pose.heading())),
-        information,
-        associated,
-        inliers,
-        points: current.len(),
-    })
+        .count()
 }
 
 /// Registers each scan to the previous one ([`register_scans`]), from the
@@ -604,6 +624,26 @@ mod tests {
         assert!(e.x().hypot(e.y()) < 2e-3, "{e:?}");
         assert!(e.heading().abs() < 2e-4, "{e:?}");
         assert!(r.inlier_share() > 0.9);
+    }
+
+    #[test]
+    fn agreement_judges_a_pose_from_elsewhere_by_the_scans() {
+        let config = ScanMatchConfig::standard();
+        let a = BeamCloud::from_scan(&room_scan(&Pose2::identity()), &config);
+        let motion = Pose2::new(0.20, -0.10, 0.08);
+        let b = BeamCloud::from_scan(&room_scan(&motion), &config);
+        let right = agreeing_points(&a, &b, &motion, &config);
+        assert!(right as f64 > 0.9 * b.len() as f64, "{right} of {}", b.len());
+        // The same motion turned by 5° leaves few points on their walls.
+        let turned = Pose2::new(0.20, -0.10, 0.08 + 5f64.to_radians());
+        assert!((agreeing_points(&a, &b, &turned, &config) as f64) < 0.3 * b.len() as f64);
+        let r = register_scans(&a, &b, &Pose2::new(0.1, 0.0, 0.0), &config).unwrap();
+        assert_eq!(r.inliers, agreeing_points(&a, &b, &r.reference_from_current, &config));
+        let nan = Pose2::new(f64::NAN, 0.0, 0.0);
+        assert_eq!(agreeing_points(&a, &b, &nan, &config), 0);
+        let empty = BeamCloud::from_scan(&Scan::new(0.0, 0.0, 0.1, 30.0, vec![1.0; 5]), &config);
+        assert_eq!(agreeing_points(&empty, &b, &motion, &config), 0);
+        assert_eq!(agreeing_points(&a, &empty, &motion, &config), 0);
     }
 
     #[test]

@@ -816,7 +816,39 @@ fn print_csail(r: &crate::eval_real::RealReport) -> anyhow::Result<()> {
             j.heading_rms_deg / std::f64::consts::SQRT_2
         )?;
     }
+    print_scan_agreement(&r.csail_scan_agreement)?;
     print_loops(&r.csail_loops)
+}
+
+/// Which of the corrected poses and the default trajectory the scans
+/// contradict, and the rigid errors without the corrected poses contradicted
+/// from both sides.
+fn print_scan_agreement(a: &crate::eval_real::CsailAgreement) -> anyhow::Result<()> {
+    let list = |links: &[[usize; 2]]| {
+        links.iter().map(|[a, b]| format!("{a}->{b}")).collect::<Vec<_>>().join(", ")
+    };
+    outln!(
+        "judged by the scans ({} links between consecutive corrected scans): the later scan's points on the earlier scan's surfaces, mean share {:.3} with the corrected poses, {:.3} with {}; a link contradicted when under {:.0}% fall there and the other trajectory puts {:.0}% or more: the corrected poses on {} ({}), {} on {} ({})",
+        a.links,
+        a.reference_mean_share,
+        a.estimate_mean_share,
+        a.trajectory,
+        100.0 * pcaline_eval::CONTRADICTED_SHARE,
+        100.0 * pcaline_eval::AGREEING_SHARE,
+        a.reference_contradicted.len(),
+        list(&a.reference_contradicted),
+        a.trajectory,
+        a.estimate_contradicted.len(),
+        list(&a.estimate_contradicted)
+    )?;
+    outln!(
+        "{} without the {} corrected scans the scans contradict from both sides (raw {:?}): rigid {:.2}° / {:.2} m",
+        a.trajectory,
+        a.reference_outliers.len(),
+        a.reference_outliers,
+        a.rigid_heading_rms_deg_without_outliers,
+        a.rigid_position_rms_m_without_outliers
+    )
 }
 
 /// One line per loop-closing run: its loops against the reference poses.

@@ -8,13 +8,15 @@
 use crate::config_file::NamedConfig;
 use anyhow::{Context, Result};
 use pcaline::aiding::{
-    Aiding, AidingConfig, AidingMode, Localizer, LoopClosing, LoopClosureConfig, SensorLine,
+    Aiding, AidingConfig, AidingMode, BeamCloud, Localizer, LoopClosing, LoopClosureConfig,
+    ScanMatchConfig, SensorLine,
 };
 use pcaline::geometry::SensorProfile;
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
     LoopCheck, RelationErrors, StampedTrajectory, aligned_trajectory_errors, perturbed,
-    reference_by_source, relation_errors, rigidly_aligned_trajectory_errors, trajectory_errors,
+    reference_by_source, relation_errors, rigidly_aligned_trajectory_errors, scan_agreement,
+    trajectory_errors,
 };
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
@@ -154,6 +156,9 @@ pub struct RealReport {
     /// MIT CSAIL trajectories against the corrected poses (relations between
     /// consecutive corrected scans).
     pub csail: Vec<TrajectoryRow>,
+    /// MIT CSAIL: the default trajectory and the corrected poses judged by
+    /// the scans.
+    pub csail_scan_agreement: CsailAgreement,
     /// MIT CSAIL: the loops of each loop-closing mode against the corrected
     /// poses.
     pub csail_loops: Vec<LoopRow>,
@@ -351,6 +356,7 @@ pub fn evaluate(data: &Path, config: &NamedConfig, options: &RealOptions) -> Res
         rows: csail,
         loops: csail_loops,
         sensitivity,
+        agreement: csail_scan_agreement,
     } = csail?;
     let IntelResult { rows: intel, moved: mut own_poses, cells: drift_grid, loops: intel_loops } =
         intel?;
@@ -361,6 +367,7 @@ pub fn evaluate(data: &Path, config: &NamedConfig, options: &RealOptions) -> Res
         csail_pairs,
         csail_reference_jitter,
         csail,
+        csail_scan_agreement,
         csail_loops,
         csail_sensitivity: sensitivity,
         intel,
@@ -451,8 +458,16 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
     let mut sources = Vec::new();
     // Each scan and its lines, kept for the sensitivity runs.
     let mut kept: Vec<(pcaline::Scan, Vec<SensorLine>)> = Vec::new();
+    // The corrected scans' points, to judge the corrected poses by them.
+    let judge = ScanMatchConfig::standard();
+    let corrected_scans: std::collections::HashSet<usize> =
+        pairs.iter().map(|p| p.raw_index).collect();
+    let mut clouds: std::collections::HashMap<usize, BeamCloud> = Default::default();
     for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
         let LogRecord::Scan(s) = record? else { continue };
+        if corrected_scans.contains(&sources.len()) {
+            clouds.insert(sources.len(), BeamCloud::from_scan(&s.scan, &judge));
+        }
         let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
         let lines = loops.detector.detect(&s.scan).lines;
         for (out, l) in poses.iter_mut().zip(&mut loops.loops) {
@@ -509,7 +524,55 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
         Vec::new()
     };
     let reference_jitter = reference_jitter(&pairs, &sources);
-    Ok(CsailResult { pairs: pairs.len(), reference_jitter, rows, loops: loop_rows, sensitivity })
+    let (name, _, _) = modes(config)[DEFAULT_MODE];
+    let agreement =
+        score.agreement(&format!("{name} odometry"), &poses[DEFAULT_MODE], &clouds, &judge)?;
+    Ok(CsailResult {
+        pairs: pairs.len(),
+        reference_jitter,
+        rows,
+        loops: loop_rows,
+        sensitivity,
+        agreement,
+    })
+}
+
+/// The mode of [`modes`] that `pcaline map` runs by default (the estimator
+/// with loop closure).
+const DEFAULT_MODE: usize = 5;
+
+/// MIT CSAIL's corrected poses and one of our trajectories judged by the
+/// scans, link by link between consecutive corrected scans
+/// ([`pcaline_eval::scan_agreement`]), and the trajectory's rigid errors
+/// without the scans whose corrected pose the scans contradict from both
+/// sides.
+#[derive(Debug, Serialize)]
+pub struct CsailAgreement {
+    /// Which trajectory.
+    pub trajectory: String,
+    /// Links judged (consecutive corrected scans).
+    pub links: usize,
+    /// Mean over the links of the share of the later scan's points on the
+    /// earlier scan's surfaces, with the corrected poses.
+    pub reference_mean_share: f64,
+    /// The same with the trajectory.
+    pub estimate_mean_share: f64,
+    /// Links (raw scan indices) where the corrected poses leave under
+    /// [`pcaline_eval::CONTRADICTED_SHARE`] of the later scan's points on
+    /// the earlier scan's surfaces and the trajectory at least
+    /// [`pcaline_eval::AGREEING_SHARE`].
+    pub reference_contradicted: Vec<[usize; 2]>,
+    /// The same the other way round: the trajectory contradicted, the
+    /// corrected poses not.
+    pub estimate_contradicted: Vec<[usize; 2]>,
+    /// Raw scans whose corrected pose the scans contradict from both sides
+    /// ([`pcaline_eval::ScanAgreement::reference_outliers`]).
+    pub reference_outliers: Vec<usize>,
+    /// Heading rms after the rigid alignment of the other corrected scans,
+    /// degrees.
+    pub rigid_heading_rms_deg_without_outliers: f64,
+    /// Position rms after the same alignment, metres.
+    pub rigid_position_rms_m_without_outliers: f64,
 }
 
 /// How far a reference's heading jitters from scan to scan, measured where
@@ -576,6 +639,9 @@ struct CsailResult {
     loops: Vec<LoopRow>,
     /// The sensitivity runs, if asked for.
     sensitivity: Vec<SensitivityRun>,
+    /// The default mode's trajectory and the corrected poses judged by the
+    /// scans.
+    agreement: CsailAgreement,
 }
 
 /// Scores a trajectory of the raw log's scans against MIT CSAIL's corrected
@@ -601,15 +667,19 @@ impl<'a> CsailScore<'a> {
         CsailScore { pairs, reference, relations }
     }
 
-    /// The row of the trajectory `est` (a pose per raw scan), named `name`.
-    fn row(&self, name: &str, est: &[Pose2]) -> Result<TrajectoryRow> {
-        let picked: Vec<Pose2> = self
-            .pairs
+    /// The poses of `est` (a pose per raw scan) at the corrected scans.
+    fn at_corrected_scans(&self, est: &[Pose2]) -> Result<Vec<Pose2>> {
+        self.pairs
             .iter()
             .map(|p| {
                 est.get(p.raw_index).copied().context("a pair names a raw scan beyond the log")
             })
-            .collect::<Result<_>>()?;
+            .collect()
+    }
+
+    /// The row of the trajectory `est` (a pose per raw scan), named `name`.
+    fn row(&self, name: &str, est: &[Pose2]) -> Result<TrajectoryRow> {
+        let picked = self.at_corrected_scans(est)?;
         let e = aligned_trajectory_errors(&picked, &self.reference).context("no pairs")?;
         let rigid =
             rigidly_aligned_trajectory_errors(&picked, &self.reference).context("no pairs")?;
@@ -626,6 +696,47 @@ impl<'a> CsailScore<'a> {
             rigid_heading_rms_deg: Some(rigid.heading_rms_rad.to_degrees()),
             rigid_position_rms_m: Some(rigid.position_rms_m),
             relations: r.into(),
+        })
+    }
+
+    /// The trajectory `est` (a pose per raw scan) and the corrected poses
+    /// judged by the corrected scans' `clouds` (by raw index) with `judge`.
+    fn agreement(
+        &self,
+        name: &str,
+        est: &[Pose2],
+        clouds: &std::collections::HashMap<usize, BeamCloud>,
+        judge: &ScanMatchConfig,
+    ) -> Result<CsailAgreement> {
+        let picked = self.at_corrected_scans(est)?;
+        let ordered: Vec<BeamCloud> = self
+            .pairs
+            .iter()
+            .map(|p| clouds.get(&p.raw_index).cloned().context("a corrected scan was not read"))
+            .collect::<Result<_>>()?;
+        let a = scan_agreement(&ordered, &self.reference, &picked, judge);
+        let mean = |share: fn(&pcaline_eval::LinkAgreement) -> f64| {
+            a.links.iter().map(share).sum::<f64>() / a.links.len().max(1) as f64
+        };
+        let raw = |k: usize| self.pairs[k].raw_index;
+        let links = |l: &pcaline_eval::LinkAgreement| [raw(l.from), raw(l.to)];
+        let keep: Vec<usize> =
+            (0..picked.len()).filter(|k| !a.reference_outliers.contains(k)).collect();
+        let rigid = rigidly_aligned_trajectory_errors(
+            &keep.iter().map(|&k| picked[k]).collect::<Vec<_>>(),
+            &keep.iter().map(|&k| self.reference[k]).collect::<Vec<_>>(),
+        )
+        .context("no pairs")?;
+        Ok(CsailAgreement {
+            trajectory: name.to_string(),
+            links: a.links.len(),
+            reference_mean_share: mean(|l| l.reference_share),
+            estimate_mean_share: mean(|l| l.estimate_share),
+            reference_contradicted: a.reference_contradicted().map(links).collect(),
+            estimate_contradicted: a.estimate_contradicted().map(links).collect(),
+            reference_outliers: a.reference_outliers.iter().map(|&k| raw(k)).collect(),
+            rigid_heading_rms_deg_without_outliers: rigid.heading_rms_rad.to_degrees(),
+            rigid_position_rms_m_without_outliers: rigid.position_rms_m,
         })
     }
 }

@@ -20,6 +20,7 @@ mod loop_check;
 mod map_quality;
 mod relation_metric;
 mod reproduce;
+mod scan_agreement;
 mod sensitivity;
 mod sharpness;
 mod trajectory;
@@ -41,6 +42,10 @@ pub use relation_metric::{RelationErrors, StampedTrajectory, relation_errors};
 pub use reproduce::{
     ETH_EXPERIMENTS, EthExperiment, EthResult, FitRow, FitRowResult, TABLE1, TABLE2, TABLE3,
     dataset, run_eth, run_fit_row,
+};
+pub use scan_agreement::{
+    AGREEING_SHARE, CONTRADICTED_SHARE, LinkAgreement, MAX_OUTLIER_STRETCH, ScanAgreement,
+    scan_agreement,
 };
 pub use sensitivity::{SENSITIVITY_PERTURBATION, SENSITIVITY_SEEDS, perturbed};
 pub use sharpness::OccupiedCells;
