@@ -173,12 +173,14 @@ impl Mapper {
     }
 
     /// Processes one scan without a localization source (LIDAR-only mode):
-    /// the last estimated motion is the prediction, the line matches
-    /// estimate the motion.
+    /// the scan registered to the previous one measures the motion, with the
+    /// last estimated motion as its prior (the prediction alone when the
+    /// registration is off or not trusted), and the line matches correct
+    /// it.
     pub fn process_without_source(&mut self, scan: &Scan) -> MapperStep {
         self.last_source = None;
         self.detect(scan, self.localizer.velocity());
-        let (pose, report) = self.localizer.step_without_source(scan.stamp_s, &self.detected);
+        let (pose, report) = self.localizer.step_scan_without_source(scan, &self.detected);
         self.step(pose, report)
     }
 

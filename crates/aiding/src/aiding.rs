@@ -9,8 +9,8 @@ use crate::{
 };
 use crate::{
     MotionNoise, Registration, fuse_registration, gate_distance2, heading_correction,
-    iterated_update, joint_consistent, measure, predict, predict_with, rotate_step,
-    solve_translation, weighted_offset,
+    iterated_update, joint_consistent, measure, predict_with, rotate_step, solve_translation,
+    weighted_offset,
 };
 use crate::{PoseWindow, WindowStep};
 use pcaline_fitting::Moments;
@@ -424,8 +424,16 @@ impl Aiding {
             }
             _ => (self.last_motion.unwrap_or_default(), e.constant_velocity),
         };
-        let (predicted, mut cov) = predict(&previous, &self.covariance, &motion, &noise);
-        self.pending_step = Some((motion, noise.covariance(&motion)));
+        let (mut motion, mut motion_cov) = (motion, noise.covariance(&motion));
+        if let (Some(r), Some(c)) = (self.registration.take(), e.scan_matching) {
+            // Without a source the registration measures the step; the
+            // constant-velocity motion is only its prior, doubted by
+            // construction (a conflict goes to the registration).
+            let f = fuse_registration(&motion, &motion_cov, &r, &c, true);
+            (motion, motion_cov) = (f.increment, f.covariance);
+        }
+        let (predicted, mut cov) = predict_with(&previous, &self.covariance, &motion, &motion_cov);
+        self.pending_step = Some((motion, motion_cov));
         if let Some(c) = e.calibration {
             // No source step to scale: the pose-scale covariance only turns
             // with the pose.

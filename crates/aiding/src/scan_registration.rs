@@ -428,7 +428,8 @@ pub struct ScanRegistrar {
 #[derive(Debug, Clone)]
 struct Previous {
     cloud: BeamCloud,
-    source: Pose2,
+    /// The source's pose at the previous scan (`None` without a source).
+    source: Option<Pose2>,
     /// The last trusted registration (the next step's extra guess).
     increment: Option<Pose2>,
 }
@@ -457,18 +458,38 @@ impl ScanRegistrar {
             self.previous = None;
             return None;
         }
+        self.next_from(Some(source), scan)
+    }
+
+    /// The registration of `scan` to the previous scan without a source
+    /// (LIDAR-only mode), when it is trusted (as [`Self::next`]): from the
+    /// last trusted registration as the guess (constant velocity at the
+    /// scan rate), the identity when there is none, and the turned guesses
+    /// when too few points agree. `None` for the first scan and when the
+    /// registration failed or is not trusted.
+    pub fn next_without_source(&mut self, scan: &Scan) -> Option<Registration> {
+        self.next_from(None, scan)
+    }
+
+    /// [`Self::next`] and [`Self::next_without_source`]: the guess is the
+    /// source's motion where both scans have a source's pose, else the last
+    /// trusted registration, else the identity.
+    fn next_from(&mut self, source: Option<&Pose2>, scan: &Scan) -> Option<Registration> {
         let cloud = BeamCloud::from_scan(scan, &self.config);
         let previous = self.previous.take();
         let trusted = previous.as_ref().and_then(|p| {
-            let guess = p.source.between(source);
-            self.register(&p.cloud, &cloud, &guess, p.increment).filter(|r| {
+            let (guess, other) = match (p.source, source) {
+                (Some(a), Some(b)) => (a.between(b), p.increment),
+                _ => (p.increment.unwrap_or_default(), None),
+            };
+            self.register(&p.cloud, &cloud, &guess, other).filter(|r| {
                 r.inlier_share() >= self.config.min_inlier_share
                     && r.weakest_information() >= self.config.min_information_per_point
             })
         });
         self.previous = Some(Previous {
             cloud,
-            source: *source,
+            source: source.copied(),
             increment: trusted.map(|r| r.reference_from_current),
         });
         trusted
@@ -572,12 +593,12 @@ pub fn fuse_registration(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A 6 x 4 m room seen from `pose` (sensor at the pose), 361 beams over
     /// 270°, exact ranges.
-    fn room_scan(pose: &Pose2) -> Scan {
+    pub(crate) fn room_scan(pose: &Pose2) -> Scan {
         let walls = [
             ((-3.0, -2.0), (3.0, -2.0)),
             ((3.0, -2.0), (3.0, 2.0)),

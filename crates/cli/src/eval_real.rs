@@ -8,7 +8,7 @@
 use crate::config_file::NamedConfig;
 use anyhow::{Context, Result};
 use pcaline::aiding::{
-    Aiding, AidingConfig, AidingMode, BeamCloud, Localizer, LoopClosing, LoopClosureConfig,
+    AidingConfig, AidingMode, BeamCloud, Localizer, LoopClosing, LoopClosureConfig,
     ScanMatchConfig, SensorLine,
 };
 use pcaline::geometry::SensorProfile;
@@ -1252,8 +1252,8 @@ pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport>
     let mut detector = LineDetector::new(config.detector)?;
     let (mut residuals, mut points) = (Vec::new(), Vec::new());
     let estimator = config.aiding_in(AidingMode::Estimator);
-    let (mut deskewed, mut skewed) =
-        (Aiding::new(estimator, config.map)?, Aiding::new(estimator, config.map)?);
+    let lidar_only = || Localizer::new(estimator, config.map, None);
+    let (mut deskewed, mut skewed) = (lidar_only()?, lidar_only()?);
     let mut cells = [0.05; 3].map(pcaline_eval::OccupiedCells::new);
     let mut first: Option<Pose2> = None;
     let scans = read_log(log, &LogOptions::default(), |record| {
@@ -1264,7 +1264,7 @@ pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport>
                 points.push(l.line.n_points());
             }
             let plain: Vec<SensorLine> = detection.lines.iter().map(SensorLine::from).collect();
-            let (skew_pose, _) = skewed.step_without_source(s.scan.stamp_s, &plain);
+            let (skew_pose, _) = skewed.step_scan_without_source(&s.scan, &plain);
             let velocity = deskewed.velocity();
             let lines: Vec<SensorLine> = detector
                 .detect_moving(&s.scan, velocity.as_ref())
@@ -1272,7 +1272,7 @@ pub fn utm_residuals(log: &Path, config: &NamedConfig) -> Result<ResidualReport>
                 .iter()
                 .map(SensorLine::from)
                 .collect();
-            let (pose, _) = deskewed.step_without_source(s.scan.stamp_s, &lines);
+            let (pose, _) = deskewed.step_scan_without_source(&s.scan, &lines);
             cells[0].add(&s.scan, &pose);
             cells[1].add(&s.scan, first.get_or_insert(pose));
             cells[2].add(&s.scan, &skew_pose);

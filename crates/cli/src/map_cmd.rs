@@ -568,7 +568,8 @@ pub fn run(args: &MapArgs, quiet: bool) -> Result<()> {
             if without_odometry > 0 {
                 format!(
                     ", {without_odometry} scans without odometry (LIDAR-only mode: \
-                     constant-velocity prediction, motion from the line matches)"
+                     constant-velocity prediction, motion from each scan's registration to the previous one \
+                     and the line matches)"
                 )
             } else {
                 String::new()
