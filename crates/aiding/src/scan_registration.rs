@@ -20,6 +20,7 @@
 //!   ([`crate::EstimatorConfig::scan_matching`]).
 
 use pcaline_geometry::{ConfigError, Matrix3, Point2, Pose2, Scan, Vector3, wrap_angle};
+use std::f64::consts::TAU;
 
 /// Settings of [`register_scans`], [`ScanRegistrar`] and
 /// [`fuse_registration`].
@@ -248,7 +249,16 @@ impl BeamCloud {
     /// beams within `half_width` beams of the bearing of `q`, if within
     /// `gate_m`.
     fn nearest(&self, q: &Point2<f64>, half_width: isize, gate_m: f64) -> Option<usize> {
-        let beam = ((q.y.atan2(q.x) - self.angle_min_rad) / self.increment_rad).round();
+        // The bearing from the first beam in the scan's sweep direction, in
+        // [0, 2π) but for half a beam before the first: a scan that starts
+        // at 0 and sweeps a full turn sees bearings atan2 gives as negative.
+        let step = self.increment_rad.abs();
+        let from_first = (q.y.atan2(q.x) - self.angle_min_rad) * self.increment_rad.signum();
+        let mut from_first = from_first.rem_euclid(TAU);
+        if from_first > TAU - 0.5 * step {
+            from_first -= TAU;
+        }
+        let beam = (from_first / step).round();
         if !(beam >= 0.0 && beam < self.points.len() as f64) {
             return None;
         }
@@ -599,6 +609,13 @@ pub(crate) mod tests {
     /// A 6 x 4 m room seen from `pose` (sensor at the pose), 361 beams over
     /// 270°, exact ranges.
     pub(crate) fn room_scan(pose: &Pose2) -> Scan {
+        let increment = 270f64.to_radians() / 360.0;
+        room_scan_over(pose, -135f64.to_radians(), increment, 361)
+    }
+
+    /// The room of [`room_scan`] seen by `n` beams from `angle_min`, `increment`
+    /// apart.
+    fn room_scan_over(pose: &Pose2, angle_min: f64, increment: f64, n: usize) -> Scan {
         let walls = [
             ((-3.0, -2.0), (3.0, -2.0)),
             ((3.0, -2.0), (3.0, 2.0)),
@@ -606,9 +623,6 @@ pub(crate) mod tests {
             ((-3.0, 2.0), (-3.0, -2.0)),
             ((0.5, 0.8), (1.5, 1.2)),
         ];
-        let n = 361;
-        let angle_min = -135f64.to_radians();
-        let increment = 270f64.to_radians() / (n - 1) as f64;
         let ranges = (0..n)
             .map(|i| {
                 let a = pose.heading() + angle_min + increment * i as f64;
@@ -665,6 +679,19 @@ pub(crate) mod tests {
         let empty = BeamCloud::from_scan(&Scan::new(0.0, 0.0, 0.1, 30.0, vec![1.0; 5]), &config);
         assert_eq!(agreeing_points(&empty, &b, &motion, &config), 0);
         assert_eq!(agreeing_points(&a, &empty, &motion, &config), 0);
+    }
+
+    #[test]
+    fn a_scan_sweeping_a_full_turn_from_zero_registers_on_both_halves() {
+        // 720 beams from 0 to 2π (as the TurtleBot's LDS-01 publishes them):
+        // bearings past π come out of atan2 negative.
+        let full_turn = |pose: &Pose2| room_scan_over(pose, 0.0, TAU / 720.0, 720);
+        let config = ScanMatchConfig::standard();
+        let a = BeamCloud::from_scan(&full_turn(&Pose2::identity()), &config);
+        let motion = Pose2::new(0.05, 0.0, 0.0);
+        let b = BeamCloud::from_scan(&full_turn(&motion), &config);
+        let agreeing = agreeing_points(&a, &b, &motion, &config);
+        assert!(agreeing as f64 > 0.95 * b.len() as f64, "{agreeing} of {}", b.len());
     }
 
     #[test]
