@@ -695,6 +695,22 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn a_scan_swept_clockwise_registers_as_one_swept_counterclockwise() {
+        // A LIDAR mounted upside down: beams from +135° to -135°.
+        let clockwise = |pose: &Pose2| {
+            room_scan_over(pose, 135f64.to_radians(), -270f64.to_radians() / 360.0, 361)
+        };
+        let config = ScanMatchConfig::standard();
+        let a = BeamCloud::from_scan(&clockwise(&Pose2::identity()), &config);
+        let motion = Pose2::new(0.20, -0.10, 0.08);
+        let b = BeamCloud::from_scan(&clockwise(&motion), &config);
+        let r = register_scans(&a, &b, &Pose2::new(0.1, 0.0, 0.0), &config).unwrap();
+        let e = motion.between(&r.reference_from_current);
+        assert!(e.x().hypot(e.y()) < 2e-3 && e.heading().abs() < 2e-4, "{e:?}");
+        assert!(r.inlier_share() > 0.9);
+    }
+
+    #[test]
     fn a_turn_the_source_missed_is_found_by_the_turned_guesses() {
         let mut registrar = ScanRegistrar::new(ScanMatchConfig::standard()).unwrap();
         assert!(registrar.next(&Pose2::identity(), &room_scan(&Pose2::identity())).is_none());
