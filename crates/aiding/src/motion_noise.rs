@@ -111,6 +111,14 @@ impl MotionNoise {
         Matrix3::from_diagonal(&[var_t, var_t, var_r].into())
     }
 
+    /// Whether a step `increment` is a standstill: it moves less than half
+    /// the floors, in translation and in rotation (below what the floors say
+    /// any step is off by). False for a non-finite step.
+    pub fn standstill(&self, increment: &Pose2) -> bool {
+        increment.x().hypot(increment.y()) < 0.5 * self.translation_floor_m
+            && increment.heading().abs() < 0.5 * self.rotation_floor_rad
+    }
+
     /// Checks every value; errors name the field as a configuration file
     /// writes it, under `prefix` (such as `aiding.estimator.motion`).
     pub fn validate(&self, prefix: &'static str) -> Result<(), ConfigError> {
@@ -196,6 +204,17 @@ pub fn predict_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_standstill_moves_less_than_half_the_floors() {
+        let m = MotionNoise::wheel_odometry();
+        assert!(m.standstill(&Pose2::identity()));
+        assert!(m.standstill(&Pose2::new(0.002, 0.0, 0.0005)));
+        // 2.5 cm a scan: 1 m/s at 40 Hz.
+        assert!(!m.standstill(&Pose2::new(0.025, 0.0, 0.0)));
+        assert!(!m.standstill(&Pose2::new(0.0, 0.0, 0.1f64.to_radians())));
+        assert!(!m.standstill(&Pose2::new(f64::NAN, 0.0, 0.0)));
+    }
 
     #[test]
     fn uncertainty_grows_with_motion_and_heading_error_spreads_position() {
