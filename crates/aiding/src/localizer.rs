@@ -62,10 +62,7 @@ impl Localizer {
     ) -> (Pose2, StepReport) {
         if let Some(registrar) = &mut self.registrar {
             let registration = registrar.next(source, scan);
-            match &mut self.runner {
-                R::Plain(a) => a.set_registration(registration),
-                R::Loops(l) => l.set_registration(registration),
-            }
+            self.hand_over(registration);
         }
         self.step_with(scan.stamp_s, source, lines)
     }
@@ -144,12 +141,17 @@ impl Localizer {
     ) -> (Pose2, StepReport) {
         if let Some(registrar) = &mut self.registrar {
             let registration = registrar.next_without_source(scan);
-            match &mut self.runner {
-                R::Plain(a) => a.set_registration(registration),
-                R::Loops(l) => l.set_registration(registration),
-            }
+            self.hand_over(registration);
         }
         self.step_without_source(scan.stamp_s, lines)
+    }
+
+    /// Hands the next step's registration to the estimator.
+    fn hand_over(&mut self, registration: Option<crate::Registration>) {
+        match &mut self.runner {
+            R::Plain(a) => a.set_registration(registration),
+            R::Loops(l) => l.set_registration(registration),
+        }
     }
 
     /// One scan without a source (LIDAR-only mode).

@@ -526,7 +526,7 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
     let reference_jitter = reference_jitter(&pairs, &sources);
     let (name, _, _) = modes(config)[DEFAULT_MODE];
     let agreement =
-        score.agreement(&format!("{name} odometry"), &poses[DEFAULT_MODE], &clouds, &judge)?;
+        score.agreement(&format!("{name} odometry"), &poses[DEFAULT_MODE], clouds, &judge)?;
     Ok(CsailResult {
         pairs: pairs.len(),
         reference_jitter,
@@ -700,19 +700,20 @@ impl<'a> CsailScore<'a> {
     }
 
     /// The trajectory `est` (a pose per raw scan) and the corrected poses
-    /// judged by the corrected scans' `clouds` (by raw index) with `judge`.
+    /// judged by the corrected scans' `clouds` (by raw index, taken in pair
+    /// order) with `judge`.
     fn agreement(
         &self,
         name: &str,
         est: &[Pose2],
-        clouds: &std::collections::HashMap<usize, BeamCloud>,
+        mut clouds: std::collections::HashMap<usize, BeamCloud>,
         judge: &ScanMatchConfig,
     ) -> Result<CsailAgreement> {
         let picked = self.at_corrected_scans(est)?;
         let ordered: Vec<BeamCloud> = self
             .pairs
             .iter()
-            .map(|p| clouds.get(&p.raw_index).cloned().context("a corrected scan was not read"))
+            .map(|p| clouds.remove(&p.raw_index).context("a corrected scan was not read"))
             .collect::<Result<_>>()?;
         let a = scan_agreement(&ordered, &self.reference, &picked, judge);
         let mean = |share: fn(&pcaline_eval::LinkAgreement) -> f64| {
