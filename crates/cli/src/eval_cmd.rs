@@ -848,6 +848,22 @@ fn print_scan_agreement(a: &crate::eval_real::CsailAgreement) -> anyhow::Result<
         a.reference_outliers,
         a.rigid_heading_rms_deg_without_outliers,
         a.rigid_position_rms_m_without_outliers
+    )?;
+    let largest = a
+        .largest_heading_errors
+        .iter()
+        .map(|e| {
+            let mark = if e.reference_contradicted { "*" } else { "" };
+            format!("{}{mark} {:+.1}°", e.raw_index, e.error_deg)
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    outln!(
+        "{} rigid heading errors, the {} largest (raw scan; * where the scans contradict its corrected pose): {largest}; they alone make {:.2}° of the rms over all pairs, the others {:.2}° (aligned without them)",
+        a.trajectory,
+        a.largest_heading_errors.len(),
+        a.largest_heading_share_deg,
+        a.rigid_heading_rms_deg_without_largest
     )
 }
 

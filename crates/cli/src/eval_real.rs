@@ -11,12 +11,12 @@ use pcaline::aiding::{
     AidingConfig, AidingMode, BeamCloud, Localizer, LoopClosing, LoopClosureConfig,
     ScanMatchConfig, SensorLine,
 };
-use pcaline::geometry::SensorProfile;
+use pcaline::geometry::{SensorProfile, wrap_angle};
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
     LoopCheck, RelationErrors, StampedTrajectory, aligned_trajectory_errors, perturbed,
-    reference_by_source, relation_errors, rigidly_aligned_trajectory_errors, scan_agreement,
-    trajectory_errors,
+    reference_by_source, relation_errors, rigid_alignment, rigidly_aligned_trajectory_errors,
+    scan_agreement, trajectory_errors,
 };
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
@@ -573,6 +573,36 @@ pub struct CsailAgreement {
     pub rigid_heading_rms_deg_without_outliers: f64,
     /// Position rms after the same alignment, metres.
     pub rigid_position_rms_m_without_outliers: f64,
+    /// The trajectory's [`LARGEST_ERRORS_LISTED`] largest heading errors
+    /// after the rigid alignment of all corrected scans, largest first:
+    /// where the heading rms over all pairs comes from.
+    pub largest_heading_errors: Vec<LargeHeadingError>,
+    /// What those scans alone make of the rigid heading rms over all pairs
+    /// (the root of the sum of their squared errors over the number of
+    /// pairs), degrees.
+    pub largest_heading_share_deg: f64,
+    /// Rigid heading rms of the other scans, aligned without those, degrees.
+    pub rigid_heading_rms_deg_without_largest: f64,
+}
+
+/// How many of a trajectory's largest heading errors against MIT CSAIL's
+/// corrected poses [`CsailAgreement`] lists.
+pub const LARGEST_ERRORS_LISTED: usize = 5;
+
+/// One corrected scan's heading error (see
+/// [`CsailAgreement::largest_heading_errors`]).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct LargeHeadingError {
+    /// The raw scan's index.
+    pub raw_index: usize,
+    /// The trajectory's heading less the corrected one after the rigid
+    /// alignment, degrees.
+    pub error_deg: f64,
+    /// Whether the scans contradict this scan's corrected pose: on the link
+    /// into or out of it ([`pcaline_eval::LinkAgreement::reference_contradicted`]),
+    /// or from both sides of a stretch holding it
+    /// ([`pcaline_eval::ScanAgreement::reference_outliers`]).
+    pub reference_contradicted: bool,
 }
 
 /// How far a reference's heading jitters from scan to scan, measured where
@@ -616,7 +646,7 @@ fn reference_jitter(pairs: &[pcaline_io::ScanPair], raw: &[Pose2]) -> Option<Ref
         .map(|w| {
             let corrected = w[0].corrected_pose.between(&w[1].corrected_pose).heading();
             let odometry = raw[w[0].raw_index].between(&raw[w[1].raw_index]).heading();
-            pcaline::geometry::wrap_angle(corrected - odometry)
+            wrap_angle(corrected - odometry)
         })
         .collect();
     (!diffs.is_empty()).then(|| ReferenceJitter {
@@ -728,6 +758,20 @@ impl<'a> CsailScore<'a> {
             &keep.iter().map(|&k| self.reference[k]).collect::<Vec<_>>(),
         )
         .context("no pairs")?;
+        let largest = self.largest_heading_errors(&picked)?;
+        let n = picked.len() as f64;
+        let share = largest.iter().map(|&(_, e)| e * e).sum::<f64>() / n;
+        let others: Vec<usize> =
+            (0..picked.len()).filter(|k| !largest.iter().any(|&(j, _)| j == *k)).collect();
+        let without_largest = rigidly_aligned_trajectory_errors(
+            &others.iter().map(|&k| picked[k]).collect::<Vec<_>>(),
+            &others.iter().map(|&k| self.reference[k]).collect::<Vec<_>>(),
+        )
+        .context("no pairs")?;
+        let contradicted_at = |k: usize| {
+            a.reference_outliers.contains(&k)
+                || a.links.iter().any(|l| (l.from == k || l.to == k) && l.reference_contradicted())
+        };
         Ok(CsailAgreement {
             trajectory: name.to_string(),
             links: a.links.len(),
@@ -738,7 +782,37 @@ impl<'a> CsailScore<'a> {
             reference_outliers: a.reference_outliers.iter().map(|&k| raw(k)).collect(),
             rigid_heading_rms_deg_without_outliers: rigid.heading_rms_rad.to_degrees(),
             rigid_position_rms_m_without_outliers: rigid.position_rms_m,
+            largest_heading_errors: largest
+                .iter()
+                .map(|&(k, e)| LargeHeadingError {
+                    raw_index: raw(k),
+                    error_deg: e.to_degrees(),
+                    reference_contradicted: contradicted_at(k),
+                })
+                .collect(),
+            largest_heading_share_deg: share.sqrt().to_degrees(),
+            rigid_heading_rms_deg_without_largest: without_largest.heading_rms_rad.to_degrees(),
         })
+    }
+
+    /// The [`LARGEST_ERRORS_LISTED`] largest heading errors of `picked` (a
+    /// pose per corrected scan) after the rigid alignment of all: (index
+    /// among the corrected scans, signed error in radians), largest first.
+    fn largest_heading_errors(&self, picked: &[Pose2]) -> Result<Vec<(usize, f64)>> {
+        let reference_from_estimate =
+            rigid_alignment(picked, &self.reference).context("no finite pairs")?;
+        let mut errors: Vec<(usize, f64)> = picked
+            .iter()
+            .zip(&self.reference)
+            .enumerate()
+            .map(|(k, (e, r))| {
+                (k, wrap_angle(reference_from_estimate.compose(e).heading() - r.heading()))
+            })
+            .filter(|(_, e)| e.is_finite())
+            .collect();
+        errors.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        errors.truncate(LARGEST_ERRORS_LISTED);
+        Ok(errors)
     }
 }
 
@@ -1308,7 +1382,7 @@ mod tests {
     fn close(a: &Pose2, b: &Pose2) -> bool {
         (a.x() - b.x()).abs() < 1e-9
             && (a.y() - b.y()).abs() < 1e-9
-            && pcaline::geometry::wrap_angle(a.heading() - b.heading()).abs() < 1e-9
+            && wrap_angle(a.heading() - b.heading()).abs() < 1e-9
     }
 
     /// A scan, two odometry records 1 m apart, a scan, in time order; the

@@ -50,6 +50,6 @@ pub use scan_agreement::{
 pub use sensitivity::{SENSITIVITY_PERTURBATION, SENSITIVITY_SEEDS, perturbed};
 pub use sharpness::OccupiedCells;
 pub use trajectory::{
-    TrajectoryErrors, aligned_trajectory_errors, rigidly_aligned_trajectory_errors,
-    trajectory_errors,
+    TrajectoryErrors, aligned_trajectory_errors, rigid_alignment,
+    rigidly_aligned_trajectory_errors, trajectory_errors,
 };

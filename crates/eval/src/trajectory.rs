@@ -53,15 +53,26 @@ pub fn aligned_trajectory_errors(
     let aligned: Vec<Pose2> = estimate.iter().map(|p| reference_from_estimate.compose(p)).collect();
     trajectory_errors(&aligned, reference)
 }
-/// Errors of `estimate` against `reference` after the least-squares rigid
-/// alignment of all positions (rotation and translation, no scale; Horn's
-/// closed form in 2D): how well the trajectory's shape agrees, whatever its
-/// start. Pairs with a non-finite pose are left out of the alignment and
-/// count as infinite errors. `None` when no finite pair is left.
-pub fn rigidly_aligned_trajectory_errors(
-    estimate: &[Pose2],
-    reference: &[Pose2],
-) -> Option<TrajectoryErrors> {
+/// The least-squares rigid alignment of `estimate`'s positions onto
+/// `reference`'s (rotation and translation, no scale; Horn's closed form in
+/// 2D): the `reference_from_estimate` transform that, composed onto each
+/// estimated pose, brings the trajectory's shape onto the reference. Pairs
+/// with a non-finite pose are left out. When every finite position
+/// coincides, the mean heading difference is aligned instead. `None` when
+/// no finite pair is left.
+///
+/// ```
+/// use pcaline_eval::rigid_alignment;
+/// use pcaline_geometry::Pose2;
+///
+/// let reference = [Pose2::new(0.0, 0.0, 0.0), Pose2::new(1.0, 0.0, 0.0)];
+/// let moved = Pose2::new(3.0, -2.0, 0.5);
+/// let estimate: Vec<Pose2> = reference.iter().map(|p| moved.compose(p)).collect();
+/// let reference_from_estimate = rigid_alignment(&estimate, &reference).unwrap();
+/// let back = reference_from_estimate.compose(&estimate[1]);
+/// assert!((back.x() - 1.0).abs() < 1e-12 && back.y().abs() < 1e-12);
+/// ```
+pub fn rigid_alignment(estimate: &[Pose2], reference: &[Pose2]) -> Option<Pose2> {
     let pairs: Vec<(&Pose2, &Pose2)> =
         estimate.iter().zip(reference).filter(|(e, r)| e.is_finite() && r.is_finite()).collect();
     if pairs.is_empty() {
@@ -93,7 +104,19 @@ pub fn rigidly_aligned_trajectory_errors(
     };
     let rotation = Pose2::new(0.0, 0.0, theta);
     let moved = rotation.transform_point(&pcaline_geometry::Point2::new(ex, ey));
-    let reference_from_estimate = Pose2::new(rx - moved.x, ry - moved.y, theta);
+    Some(Pose2::new(rx - moved.x, ry - moved.y, theta))
+}
+
+/// Errors of `estimate` against `reference` after the least-squares rigid
+/// alignment of all positions ([`rigid_alignment`]): how well the
+/// trajectory's shape agrees, whatever its start. Pairs with a non-finite
+/// pose are left out of the alignment and count as infinite errors. `None`
+/// when no finite pair is left.
+pub fn rigidly_aligned_trajectory_errors(
+    estimate: &[Pose2],
+    reference: &[Pose2],
+) -> Option<TrajectoryErrors> {
+    let reference_from_estimate = rigid_alignment(estimate, reference)?;
     let aligned: Vec<Pose2> = estimate.iter().map(|p| reference_from_estimate.compose(p)).collect();
     trajectory_errors(&aligned, reference)
 }
