@@ -69,7 +69,7 @@ pub use pose_window::{MeasureAt, PoseWindow, WindowStep};
 pub use recovery::{Recovered, Recovery, recover};
 pub use scan_registration::{
     BeamCloud, FusedIncrement, Registration, ScanMatchConfig, ScanRegistrar, agreeing_points,
-    fuse_registration, register_scans,
+    fuse_registration, register_from_guesses, register_scans,
 };
 pub use source_calibration::{
     CalibrationConfig, MAX_TURN_RATE_RAD_S, STILL_STEP_M, STILL_TURN_RAD, SourceCalibration,

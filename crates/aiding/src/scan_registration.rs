@@ -301,6 +301,16 @@ impl Registration {
         self.inliers as f64 / self.points.max(1) as f64
     }
 
+    /// Whether the registration can be used under `config`: at least
+    /// [`ScanMatchConfig::min_inlier_share`] of the points agree and every
+    /// direction is constrained
+    /// ([`ScanMatchConfig::min_information_per_point`]; a corridor seen
+    /// along its length is not).
+    pub fn is_trusted(&self, config: &ScanMatchConfig) -> bool {
+        self.inlier_share() >= config.min_inlier_share
+            && self.weakest_information() >= config.min_information_per_point
+    }
+
     /// Smallest eigenvalue of [`Self::information`] per associated point
     /// (compare with [`ScanMatchConfig::min_information_per_point`]).
     pub fn weakest_information(&self) -> f64 {
@@ -492,10 +502,8 @@ impl ScanRegistrar {
                 (Some(a), Some(b)) => (a.between(b), p.increment),
                 _ => (p.increment.unwrap_or_default(), None),
             };
-            self.register(&p.cloud, &cloud, &guess, other).filter(|r| {
-                r.inlier_share() >= self.config.min_inlier_share
-                    && r.weakest_information() >= self.config.min_information_per_point
-            })
+            register_from_guesses(&p.cloud, &cloud, &guess, other, &self.config)
+                .filter(|r| r.is_trusted(&self.config))
         });
         self.previous = Some(Previous {
             cloud,
@@ -504,37 +512,43 @@ impl ScanRegistrar {
         });
         trusted
     }
+}
 
-    /// The registration from the source's increment; when too few points
-    /// agree, also from the previous step's registration and from the turned
-    /// guesses, keeping the one with the most agreeing points unless the
-    /// source's has nearly as many ([`ScanMatchConfig::other_guess_ratio`]).
-    fn register(
-        &self,
-        reference: &BeamCloud,
-        current: &BeamCloud,
-        source_increment: &Pose2,
-        previous_increment: Option<Pose2>,
-    ) -> Option<Registration> {
-        let c = &self.config;
-        let first = register_scans(reference, current, source_increment, c);
-        if first.is_some_and(|r| r.inlier_share() >= c.accept_inlier_share) {
-            return first;
+/// Registers `current` to `reference` from `guess` ([`register_scans`]);
+/// when fewer than [`ScanMatchConfig::accept_inlier_share`] of the points
+/// agree, also from `other` (another guess, such as the previous step's
+/// registration) and from `guess` turned by each of
+/// [`ScanMatchConfig::rotation_tries_rad`], keeping the registration with
+/// the most agreeing points unless the one from `guess` has nearly as many
+/// ([`ScanMatchConfig::other_guess_ratio`]): a source whose heading lags
+/// in a fast turn is tens of degrees off, beyond one registration's reach.
+/// `None` when no guess registers. The result is not judged: compare its
+/// [`Registration::inlier_share`] and [`Registration::weakest_information`]
+/// with the configuration's minimums before trusting it.
+pub fn register_from_guesses(
+    reference: &BeamCloud,
+    current: &BeamCloud,
+    guess: &Pose2,
+    other: Option<Pose2>,
+    config: &ScanMatchConfig,
+) -> Option<Registration> {
+    let c = config;
+    let first = register_scans(reference, current, guess, c);
+    if first.is_some_and(|r| r.inlier_share() >= c.accept_inlier_share) {
+        return first;
+    }
+    let turned =
+        c.rotation_tries_rad.iter().map(|d| Pose2::new(guess.x(), guess.y(), guess.heading() + d));
+    let best = other
+        .into_iter()
+        .chain(turned)
+        .filter_map(|g| register_scans(reference, current, &g, c))
+        .max_by_key(|r| r.inliers);
+    match (first, best) {
+        (Some(f), Some(b)) if (b.inliers as f64) < c.other_guess_ratio * f.inliers as f64 => {
+            Some(f)
         }
-        let turned = c.rotation_tries_rad.iter().map(|d| {
-            Pose2::new(source_increment.x(), source_increment.y(), source_increment.heading() + d)
-        });
-        let best = previous_increment
-            .into_iter()
-            .chain(turned)
-            .filter_map(|guess| register_scans(reference, current, &guess, c))
-            .max_by_key(|r| r.inliers);
-        match (first, best) {
-            (Some(f), Some(b)) if (b.inliers as f64) < c.other_guess_ratio * f.inliers as f64 => {
-                Some(f)
-            }
-            (f, b) => b.or(f),
-        }
+        (f, b) => b.or(f),
     }
 }
 

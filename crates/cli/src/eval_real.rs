@@ -15,8 +15,8 @@ use pcaline::geometry::{SensorProfile, wrap_angle};
 use pcaline::{LineDetector, Pose2};
 use pcaline_eval::{
     LoopCheck, RelationErrors, StampedTrajectory, aligned_trajectory_errors, perturbed,
-    reference_by_source, relation_errors, rigid_alignment, rigidly_aligned_trajectory_errors,
-    scan_agreement, trajectory_errors,
+    reference_by_registration, reference_by_source, relation_errors, rigid_alignment,
+    rigidly_aligned_trajectory_errors, scan_agreement, trajectory_errors,
 };
 use pcaline_io::{
     CarmenOptions, CarmenReader, LogOptions, LogRecord, Relation, read_log, read_relations,
@@ -419,14 +419,18 @@ fn take_optimized(runner: &mut Localizer, poses: &mut [Pose2]) {
 }
 
 /// A raw scan's corrected pose is carried from the nearest corrected scan
-/// within this many scans by the raw odometry (to check loops at keyframes
-/// without a corrected pose of their own; the corrected log holds one scan
-/// in five). Short: the odometry lags the scans by about 0.1 s
-/// (`docs/accuracy.md`), so carrying it across a fast turn adds error.
+/// within this many scans by registering the two scans
+/// ([`reference_by_registration`]), to check loops at keyframes without a
+/// corrected pose of their own (the corrected log holds one scan in five).
+/// Not by the raw odometry: it lags the scans by about 0.1 s
+/// (`docs/accuracy.md`): carried over up to two scans of a fast turn, it
+/// called 21 of 38 standing loops wrong (one by 55°), against 2 of 37 by
+/// registration.
 const CSAIL_REFERENCE_GAP_SCANS: usize = 2;
 
 /// False loops ([`FALSE_LOOP_M`] or more off) are counted against the
-/// corrected poses carried from up to this many scans away: the odometry's
+/// corrected poses carried by the raw odometry ([`reference_by_source`])
+/// from up to this many scans away, where registration may fail: the odometry's
 /// lag in a turn costs a few degrees, which cannot make a right loop half a
 /// metre wrong, and the keyframes that the strict reference leaves
 /// unchecked are checked too. (A loop 34 m off stood unchecked in one of 96
@@ -458,16 +462,24 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
     let mut sources = Vec::new();
     // Each scan and its lines, kept for the sensitivity runs.
     let mut kept: Vec<(pcaline::Scan, Vec<SensorLine>)> = Vec::new();
-    // The corrected scans' points, to judge the corrected poses by them.
+    // The points of the scans near a corrected scan: to carry the corrected
+    // poses to the keyframes by registration, and to judge the corrected
+    // poses by the scans.
     let judge = ScanMatchConfig::standard();
-    let corrected_scans: std::collections::HashSet<usize> =
-        pairs.iter().map(|p| p.raw_index).collect();
-    let mut clouds: std::collections::HashMap<usize, BeamCloud> = Default::default();
+    let mut corrected_scans: Vec<usize> = pairs.iter().map(|p| p.raw_index).collect();
+    corrected_scans.sort_unstable();
+    let near_corrected = |k: usize| {
+        let at = corrected_scans.partition_point(|&i| i < k);
+        [at.checked_sub(1), Some(at)]
+            .into_iter()
+            .flatten()
+            .filter_map(|j| corrected_scans.get(j))
+            .any(|&i| i.abs_diff(k) <= CSAIL_REFERENCE_GAP_SCANS)
+    };
+    let mut clouds: Vec<Option<BeamCloud>> = Vec::new();
     for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
         let LogRecord::Scan(s) = record? else { continue };
-        if corrected_scans.contains(&sources.len()) {
-            clouds.insert(sources.len(), BeamCloud::from_scan(&s.scan, &judge));
-        }
+        clouds.push(near_corrected(sources.len()).then(|| BeamCloud::from_scan(&s.scan, &judge)));
         let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
         let lines = loops.detector.detect(&s.scan).lines;
         for (out, l) in poses.iter_mut().zip(&mut loops.loops) {
@@ -480,7 +492,8 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
     }
     let corrected: Vec<(usize, Pose2)> =
         pairs.iter().map(|p| (p.raw_index, p.corrected_pose)).collect();
-    let per_scan = reference_by_source(&corrected, &sources, CSAIL_REFERENCE_GAP_SCANS);
+    let per_scan =
+        reference_by_registration(&corrected, &sources, &clouds, CSAIL_REFERENCE_GAP_SCANS, &judge);
     let per_scan_loose = reference_by_source(&corrected, &sources, CSAIL_FALSE_LOOP_GAP_SCANS);
     let reference = LoopReference { strict: &per_scan, loose: &per_scan_loose };
     loops.finish(&mut poses);
@@ -730,20 +743,25 @@ impl<'a> CsailScore<'a> {
     }
 
     /// The trajectory `est` (a pose per raw scan) and the corrected poses
-    /// judged by the corrected scans' `clouds` (by raw index, taken in pair
-    /// order) with `judge`.
+    /// judged by the corrected scans' `clouds` (one entry per raw scan, the
+    /// corrected ones taken) with `judge`.
     fn agreement(
         &self,
         name: &str,
         est: &[Pose2],
-        mut clouds: std::collections::HashMap<usize, BeamCloud>,
+        mut clouds: Vec<Option<BeamCloud>>,
         judge: &ScanMatchConfig,
     ) -> Result<CsailAgreement> {
         let picked = self.at_corrected_scans(est)?;
         let ordered: Vec<BeamCloud> = self
             .pairs
             .iter()
-            .map(|p| clouds.remove(&p.raw_index).context("a corrected scan was not read"))
+            .map(|p| {
+                clouds
+                    .get_mut(p.raw_index)
+                    .and_then(Option::take)
+                    .context("a corrected scan was not read")
+            })
             .collect::<Result<_>>()?;
         let a = scan_agreement(&ordered, &self.reference, &picked, judge);
         let mean = |share: fn(&pcaline_eval::LinkAgreement) -> f64| {

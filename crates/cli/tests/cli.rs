@@ -515,14 +515,15 @@ fn real_data_eval_checks_its_metrics_against_the_datasets() {
     // MIT CSAIL: the raw odometry drifts 84° from the corrected poses (the dataset's notes).
     let raw = &v["csail"][0];
     assert!((f(&raw["heading_max_deg"]) - 84.0).abs() < 1.0, "{raw}");
-    // The loop-closing mode's loops are checked against the corrected poses:
-    // it closes some, and most of them lie near a corrected scan (measured:
-    // 15 checked, 5 unchecked; 15 and 3 before the source's latency was
-    // estimated, which moves the keyframes where loops close).
+    // The loop-closing mode's loops are checked against the corrected poses,
+    // carried to the keyframes by registration: it closes some, most of them
+    // lie near a corrected scan, and few are wrong (measured: 37 checked, 2
+    // of them wrong, 6 unchecked; carried by the lagging raw odometry
+    // instead, 21 of 38 looked wrong).
     let loops = &v["csail_loops"][0];
     assert_eq!(loops["name"], "estimator + loop closure");
     let n = |k: &str| loops[k].as_u64().unwrap();
-    assert!(n("standing") > 0 && n("standing_wrong") <= n("standing"), "{loops}");
+    assert!(n("standing") > 0 && n("standing_wrong") * 4 <= n("standing"), "{loops}");
     assert!(n("switched_off_wrong") <= n("switched_off"), "{loops}");
     assert!(n("unchecked") * 2 <= n("standing") + n("switched_off"), "{loops}");
     assert!(f(&loops["standing_error_m"][0]) <= f(&loops["standing_error_m"][1]), "{loops}");

@@ -23,6 +23,8 @@ mod reproduce;
 mod scan_agreement;
 mod sensitivity;
 mod sharpness;
+#[cfg(test)]
+mod test_scans;
 mod trajectory;
 
 pub use detection::{
@@ -36,7 +38,9 @@ pub use fit_accuracy::{FitAccuracy, RangeBearingAccuracy, fit_accuracy, range_be
 pub use localization::{
     AidedRun, AidedScore, MAP_MAX_ANGLE_DEG, MAP_TOLERANCE_M, ObservedRunError, RunStep,
 };
-pub use loop_check::{LoopCheck, WRONG_LOOP_DEG, WRONG_LOOP_M, reference_by_source};
+pub use loop_check::{
+    LoopCheck, WRONG_LOOP_DEG, WRONG_LOOP_M, reference_by_registration, reference_by_source,
+};
 pub use map_quality::{MapQuality, VisibleWalls, map_quality};
 pub use relation_metric::{RelationErrors, StampedTrajectory, relation_errors};
 pub use reproduce::{

@@ -6,9 +6,14 @@
 //! A real log rarely has a reference pose at every scan (MIT CSAIL's
 //! corrected log holds one scan in five). [`reference_by_source`] carries the
 //! reference from the nearest scan that has one by the source's own relative
-//! motion, which over a few scans is good to a fraction of a degree.
+//! motion, which over a few scans of a straight run is good to a fraction of
+//! a degree, and in a turn carries the source's lag (MIT CSAIL's odometry
+//! is about 0.1 s late: several degrees over two scans of a fast turn).
+//! [`reference_by_registration`] carries it by registering the two scans
+//! instead, and leaves a scan without a reference where the registration
+//! cannot be trusted.
 
-use pcaline_aiding::{LoopOutcome, LoopRecord};
+use pcaline_aiding::{BeamCloud, LoopOutcome, LoopRecord, ScanMatchConfig, register_from_guesses};
 use pcaline_geometry::{Pose2, wrap_angle};
 
 /// A loop edge is wrong when its relative pose is off the reference's by more
@@ -45,25 +50,97 @@ pub fn reference_by_source(
     source: &[Pose2],
     max_gap: usize,
 ) -> Vec<Option<Pose2>> {
+    carried(reference, source.len(), max_gap, |i, pose, scan| {
+        Some(pose.compose(&source[i].between(&source[scan])))
+    })
+}
+
+/// The pose of each of `scans` scans carried by `carry` (from scan `i`,
+/// its pose, to scan `scan`) from the nearest of `reference`'s scans
+/// within `max_gap` (of two equally near, the earlier); `None` where there
+/// is none, where `carry` gives `None` and where its result is not finite.
+fn carried(
+    reference: &[(usize, Pose2)],
+    scans: usize,
+    max_gap: usize,
+    carry: impl Fn(usize, Pose2, usize) -> Option<Pose2>,
+) -> Vec<Option<Pose2>> {
     let mut sorted: Vec<(usize, Pose2)> =
-        reference.iter().copied().filter(|(i, p)| *i < source.len() && p.is_finite()).collect();
+        reference.iter().copied().filter(|(i, p)| *i < scans && p.is_finite()).collect();
     sorted.sort_by_key(|(i, _)| *i);
-    (0..source.len())
+    (0..scans)
         .map(|scan| {
             let at = sorted.partition_point(|(i, _)| *i < scan);
-            let nearest = [at.checked_sub(1), Some(at)]
+            let &(i, pose) = [at.checked_sub(1), Some(at)]
                 .into_iter()
                 .flatten()
                 .filter_map(|k| sorted.get(k))
                 .min_by_key(|(i, _)| i.abs_diff(scan))?;
-            let (i, pose) = *nearest;
             if i.abs_diff(scan) > max_gap {
                 return None;
             }
-            let moved = pose.compose(&source[i].between(&source[scan]));
-            moved.is_finite().then_some(moved)
+            carry(i, pose, scan).filter(Pose2::is_finite)
         })
         .collect()
+}
+
+/// The reference pose of every scan, carried from the nearest scan that has
+/// one, within `max_gap` scans, by the registration of the scan's `clouds`
+/// entry to that scan's ([`register_from_guesses`] from the source's
+/// relative motion, under `config`), where the registration is trusted
+/// ([`pcaline_aiding::Registration::is_trusted`]). The poses are the
+/// sensor's (the registration relates the sensors).
+///
+/// As [`reference_by_source`] otherwise: `reference` holds `(scan index,
+/// reference pose)` in any order, `source` and `clouds` one entry per scan.
+/// Edge cases: a referenced scan keeps its reference; a scan with no
+/// referenced scan within `max_gap`, without a cloud (`None`) or whose
+/// referenced scan has none, whose registration fails or is not trusted,
+/// or with a non-finite result gives `None`.
+///
+/// ```
+/// use pcaline_aiding::{BeamCloud, ScanMatchConfig};
+/// use pcaline_eval::reference_by_registration;
+/// use pcaline_geometry::{Pose2, Scan};
+///
+/// // A corner 2 m ahead and 1.5 m to the left, seen from two places 0.2 m
+/// // apart; the source says the sensor did not move.
+/// let corner = |pose: &Pose2| {
+///     let ranges = (0..361).map(|i| {
+///         let a = pose.heading() - 1.5 + 3.0 * i as f64 / 360.0;
+///         let (c, s) = (a.cos(), a.sin());
+///         let to_front = if c > 1e-9 { (2.0 - pose.x()) / c } else { f64::INFINITY };
+///         let to_left = if s > 1e-9 { (1.5 - pose.y()) / s } else { f64::INFINITY };
+///         to_front.min(to_left) as f32
+///     });
+///     Scan::new(-1.5, 3.0 / 360.0, 0.05, 30.0, ranges.collect())
+/// };
+/// let config = ScanMatchConfig::standard();
+/// let truth = [Pose2::identity(), Pose2::new(0.2, 0.0, 0.0)];
+/// let clouds: Vec<Option<BeamCloud>> =
+///     truth.iter().map(|p| Some(BeamCloud::from_scan(&corner(p), &config))).collect();
+/// let source = [Pose2::identity(), Pose2::identity()];
+/// let all = reference_by_registration(&[(0, truth[0])], &source, &clouds, 1, &config);
+/// let carried = all[1].unwrap();
+/// assert!((carried.x() - 0.2).abs() < 0.01 && carried.y().abs() < 0.01);
+/// ```
+pub fn reference_by_registration(
+    reference: &[(usize, Pose2)],
+    source: &[Pose2],
+    clouds: &[Option<BeamCloud>],
+    max_gap: usize,
+    config: &ScanMatchConfig,
+) -> Vec<Option<Pose2>> {
+    carried(reference, source.len(), max_gap, |i, pose, scan| {
+        if i == scan {
+            return Some(pose);
+        }
+        let (from, to) = (clouds.get(i)?.as_ref()?, clouds.get(scan)?.as_ref()?);
+        let guess = source[i].between(&source[scan]);
+        let r = register_from_guesses(from, to, &guess, None, config)
+            .filter(|r| r.is_trusted(config))?;
+        Some(pose.compose(&r.reference_from_current))
+    })
 }
 
 /// The loops of one run, checked against the reference.
@@ -129,7 +206,37 @@ impl LoopCheck {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_scans::room_scan;
     use pcaline_geometry::Matrix3;
+
+    #[test]
+    fn a_reference_is_carried_by_registration_past_a_lagging_source() {
+        let config = ScanMatchConfig::standard();
+        // A turn of 15° a scan; the source lags by one scan's turn.
+        let truth: Vec<Pose2> =
+            (0..4).map(|k| Pose2::new(0.05 * k as f64, 0.0, 0.26 * k as f64)).collect();
+        let source: Vec<Pose2> = (0..4)
+            .map(|k| Pose2::new(0.05 * k as f64, 0.0, 0.26 * (k as f64 - 1.0).max(0.0)))
+            .collect();
+        let mut clouds: Vec<Option<BeamCloud>> =
+            truth.iter().map(|p| Some(BeamCloud::from_scan(&room_scan(p), &config))).collect();
+        clouds[3] = None;
+        // The reference frame is shifted and turned against the truth's.
+        let frame = Pose2::new(10.0, -4.0, 1.0);
+        let reference = [(0, frame.compose(&truth[0]))];
+        let carried = reference_by_registration(&reference, &source, &clouds, 3, &config);
+        let by_source = reference_by_source(&reference, &source, 3);
+        for k in 1..3 {
+            let e = frame.compose(&truth[k]).between(&carried[k].unwrap());
+            assert!(e.heading().abs() < 1e-3 && e.x().hypot(e.y()) < 1e-3, "{k}: {e:?}");
+            let lagging = frame.compose(&truth[k]).between(&by_source[k].unwrap());
+            assert!((lagging.heading().abs() - 0.26).abs() < 1e-9, "{k}: {lagging:?}");
+        }
+        // Scan 0 keeps its own; scan 3 has no cloud.
+        assert_eq!(carried[0], Some(reference[0].1));
+        assert_eq!(carried[3], None);
+        assert!(by_source[3].is_some());
+    }
 
     fn record(keyframe: usize, candidate: usize, found: Pose2, outcome: LoopOutcome) -> LoopRecord {
         LoopRecord {
