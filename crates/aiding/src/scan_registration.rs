@@ -522,17 +522,15 @@ impl ScanRegistrar {
 /// the most agreeing points unless the one from `guess` has nearly as many
 /// ([`ScanMatchConfig::other_guess_ratio`]): a source whose heading lags
 /// in a fast turn is tens of degrees off, beyond one registration's reach.
-/// `None` when no guess registers. The result is not judged: compare its
-/// [`Registration::inlier_share`] and [`Registration::weakest_information`]
-/// with the configuration's minimums before trusting it.
+/// `None` when no guess registers. The result is not judged: check
+/// [`Registration::is_trusted`] before using it.
 pub fn register_from_guesses(
     reference: &BeamCloud,
     current: &BeamCloud,
     guess: &Pose2,
     other: Option<Pose2>,
-    config: &ScanMatchConfig,
+    c: &ScanMatchConfig,
 ) -> Option<Registration> {
-    let c = config;
     let first = register_scans(reference, current, guess, c);
     if first.is_some_and(|r| r.inlier_share() >= c.accept_inlier_share) {
         return first;

@@ -462,24 +462,13 @@ fn csail(data: &Path, config: &NamedConfig, sensitivity_seeds: &[u64]) -> Result
     let mut sources = Vec::new();
     // Each scan and its lines, kept for the sensitivity runs.
     let mut kept: Vec<(pcaline::Scan, Vec<SensorLine>)> = Vec::new();
-    // The points of the scans near a corrected scan: to carry the corrected
-    // poses to the keyframes by registration, and to judge the corrected
-    // poses by the scans.
+    // Every scan's points: to carry the corrected poses to the keyframes by
+    // registration, and to judge the corrected poses by the scans.
     let judge = ScanMatchConfig::standard();
-    let mut corrected_scans: Vec<usize> = pairs.iter().map(|p| p.raw_index).collect();
-    corrected_scans.sort_unstable();
-    let near_corrected = |k: usize| {
-        let at = corrected_scans.partition_point(|&i| i < k);
-        [at.checked_sub(1), Some(at)]
-            .into_iter()
-            .flatten()
-            .filter_map(|j| corrected_scans.get(j))
-            .any(|&i| i.abs_diff(k) <= CSAIL_REFERENCE_GAP_SCANS)
-    };
     let mut clouds: Vec<Option<BeamCloud>> = Vec::new();
     for record in CarmenReader::open(&dir.join("mit-csail.clf"), CarmenOptions::default())? {
         let LogRecord::Scan(s) = record? else { continue };
-        clouds.push(near_corrected(sources.len()).then(|| BeamCloud::from_scan(&s.scan, &judge)));
+        clouds.push(Some(BeamCloud::from_scan(&s.scan, &judge)));
         let source = s.odometry.or(s.pose).context("a FLASER line without odometry")?;
         let lines = loops.detector.detect(&s.scan).lines;
         for (out, l) in poses.iter_mut().zip(&mut loops.loops) {
